@@ -1,0 +1,225 @@
+//! The perspective camera and its key-framed paths.
+//!
+//! Conventions (also in the README): pixel `(px, py)` covers `[px, px+1) × [py, py+1)`,
+//! row 0 at the top; its primary ray passes through `(px + 0.5, py + 0.5)` on the image
+//! plane; `fov_y_deg` is the vertical field of view. Clip space follows glam's right-handed
+//! conventions with depth in `[0, 1]`.
+
+use crate::error::{Error, Result};
+use crate::math::{vec3, Mat4, Vec3};
+use serde::{Deserialize, Serialize};
+
+/// The largest image side accepted (each side); larger requests are refused before any
+/// allocation. Raise it with care: a frame's buffers grow with the pixel count.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// A perspective pinhole camera.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Camera {
+    /// Eye position in world units.
+    pub eye: Vec3,
+    /// The point looked at.
+    pub target: Vec3,
+    /// The up direction (need not be orthogonal to the view direction).
+    pub up: Vec3,
+    /// Vertical field of view in degrees.
+    pub fov_y_deg: f32,
+    /// Near plane distance (along the view axis).
+    pub near: f32,
+    /// Far plane distance (along the view axis).
+    pub far: f32,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target` with +Y up, near/far to be fitted later by
+    /// [`Camera::fit_depth_range`] (set to 0.01 and 1000 here).
+    pub fn look_at(eye: Vec3, target: Vec3, fov_y_deg: f32, width: u32, height: u32) -> Self {
+        let mut up = Vec3::Y;
+        if (target - eye).normalize_or_zero().cross(up).length_squared() < 1e-8 {
+            up = Vec3::Z;
+        }
+        Camera {
+            eye,
+            target,
+            up,
+            fov_y_deg,
+            near: 0.01,
+            far: 1000.0,
+            width,
+            height,
+        }
+    }
+
+    /// Checks that the camera can form an image; names the problem otherwise.
+    pub fn validate(&self) -> Result<()> {
+        if self.width == 0 || self.height == 0 {
+            return Err(Error::param(format!(
+                "image size {}x{} is empty: width and height must be at least 1",
+                self.width, self.height
+            )));
+        }
+        if self.width > MAX_IMAGE_SIDE || self.height > MAX_IMAGE_SIDE {
+            return Err(Error::Limit(format!(
+                "image size {}x{} exceeds the limit of {MAX_IMAGE_SIDE} pixels a side",
+                self.width, self.height
+            )));
+        }
+        let finite = self.eye.is_finite() && self.target.is_finite() && self.up.is_finite();
+        if !finite || !self.fov_y_deg.is_finite() {
+            return Err(Error::param("camera has a non-finite eye, target, up or field of view"));
+        }
+        if (self.target - self.eye).length_squared() == 0.0 {
+            return Err(Error::param("camera eye and target are the same point"));
+        }
+        if self.forward().cross(self.up).length_squared() < 1e-12 {
+            return Err(Error::param("camera up direction is parallel to the view direction"));
+        }
+        if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 179.0) {
+            return Err(Error::param(format!(
+                "camera field of view {}° is outside (0°, 179°)",
+                self.fov_y_deg
+            )));
+        }
+        if !(self.near > 0.0 && self.far > self.near) {
+            return Err(Error::param(format!(
+                "camera near {} and far {} must satisfy 0 < near < far",
+                self.near, self.far
+            )));
+        }
+        Ok(())
+    }
+
+    /// Unit view direction.
+    pub fn forward(&self) -> Vec3 {
+        (self.target - self.eye).normalize()
+    }
+
+    /// Orthonormal camera basis: (right, true up, forward).
+    pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
+        let f = self.forward();
+        let r = f.cross(self.up).normalize();
+        let u = r.cross(f);
+        (r, u, f)
+    }
+
+    /// Width over height.
+    pub fn aspect(&self) -> f32 {
+        self.width as f32 / self.height as f32
+    }
+
+    /// World to camera space (right-handed, looking down −Z).
+    pub fn view_from_world(&self) -> Mat4 {
+        crate::math::look_at_rh(self.eye, self.target, self.up)
+    }
+
+    /// Camera space to clip space, depth in [0, 1].
+    pub fn clip_from_view(&self) -> Mat4 {
+        crate::math::perspective_rh(self.fov_y_deg.to_radians(), self.aspect(), self.near, self.far)
+    }
+
+    /// World to clip space.
+    pub fn clip_from_world(&self) -> Mat4 {
+        self.clip_from_view() * self.view_from_world()
+    }
+
+    /// The (unnormalized) direction of the primary ray through image position `(x, y)` in
+    /// pixels (pixel centres at `+0.5`). Its component along `forward` is 1, so the ray
+    /// parameter equals the view depth.
+    pub fn ray_direction(&self, x: f32, y: f32) -> Vec3 {
+        let (r, u, f) = self.basis();
+        let th = (self.fov_y_deg.to_radians() * 0.5).tan();
+        let ndc_x = x / self.width as f32 * 2.0 - 1.0;
+        let ndc_y = 1.0 - y / self.height as f32 * 2.0;
+        f + r * (ndc_x * th * self.aspect()) + u * (ndc_y * th)
+    }
+
+    /// Sets near and far so the box `bounds` lies inside the depth range: far just beyond
+    /// its farthest corner, near at a fraction of far (or the nearest corner when the box is
+    /// entirely in front), so depth precision is spent where the scene is.
+    pub fn fit_depth_range(&mut self, bounds: &crate::math::Aabb) {
+        let f = self.forward();
+        let mut zmin = f32::INFINITY;
+        let mut zmax = f32::NEG_INFINITY;
+        for c in bounds.corners() {
+            let z = (c - self.eye).dot(f);
+            zmin = zmin.min(z);
+            zmax = zmax.max(z);
+        }
+        let far = (zmax * 1.01).max(1e-3);
+        let near = if zmin > 0.0 { zmin * 0.99 } else { far * 1e-4 };
+        self.far = far;
+        self.near = near.max(far * 1e-5);
+    }
+
+    /// Moves the camera along its view ray to `factor` times its distance from its target.
+    pub fn scale_distance(&mut self, factor: f32) {
+        self.eye = self.target + (self.eye - self.target) * factor;
+    }
+}
+
+/// One key frame of a camera path.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CameraKey {
+    /// Eye position.
+    pub eye: Vec3,
+    /// Look-at point.
+    pub target: Vec3,
+}
+
+/// A key-framed camera path: eye and target interpolated linearly between keys, sampled
+/// at `n` evenly spaced frames from the first key to the last.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CameraPath {
+    /// The keys, in order.
+    pub keys: Vec<CameraKey>,
+}
+
+impl CameraPath {
+    /// The camera of frame `i` of `n`, starting from `base` (which gives fov, up, size).
+    pub fn camera_at(&self, base: &Camera, i: usize, n: usize) -> Camera {
+        let mut c = *base;
+        if self.keys.is_empty() {
+            return c;
+        }
+        if self.keys.len() == 1 || n <= 1 {
+            c.eye = self.keys[0].eye;
+            c.target = self.keys[0].target;
+            return c;
+        }
+        let s = i as f32 / (n - 1) as f32 * (self.keys.len() - 1) as f32;
+        let k = (s.floor() as usize).min(self.keys.len() - 2);
+        let t = s - k as f32;
+        let (a, b) = (self.keys[k], self.keys[k + 1]);
+        c.eye = a.eye.lerp(b.eye, t);
+        c.target = a.target.lerp(b.target, t);
+        c
+    }
+}
+
+/// A default viewing direction for auto-framing: from the front, above and to the right.
+pub const AUTO_VIEW_DIRECTION: Vec3 = vec3(0.45, 0.35, 0.82);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ray_direction_matches_projection() {
+        let mut cam = Camera::look_at(vec3(1.0, 2.0, 3.0), vec3(0.0, 0.5, 0.0), 50.0, 320, 200);
+        cam.near = 0.1;
+        cam.far = 100.0;
+        let m = cam.clip_from_world();
+        for &(x, y) in &[(0.5f32, 0.5f32), (160.0, 100.0), (319.5, 10.25)] {
+            let p = cam.eye + cam.ray_direction(x, y) * 7.0;
+            let c = m * p.extend(1.0);
+            let sx = (c.x / c.w * 0.5 + 0.5) * 320.0;
+            let sy = (0.5 - c.y / c.w * 0.5) * 200.0;
+            assert!((sx - x).abs() < 1e-3 && (sy - y).abs() < 1e-3, "{sx},{sy} vs {x},{y}");
+            assert!((c.w - 7.0).abs() < 1e-4);
+        }
+    }
+}

@@ -1,0 +1,70 @@
+//! Typed errors of the library. Every variant renders as one sentence that names the
+//! culprit (file, element, parameter), so the command line can print it as it is.
+
+use std::path::PathBuf;
+
+/// Result alias for the library.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything that can go wrong in shadowlab.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A file could not be read.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's reason.
+        source: std::io::Error,
+    },
+    /// A scene or mesh file is malformed; `what` names the element and the problem.
+    #[error("{path}: {what}")]
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// The element at fault and what is wrong with it.
+        what: String,
+    },
+    /// The scene is unusable (empty, non-finite, …).
+    #[error("scene {scene}: {what}")]
+    Scene {
+        /// The scene's name or path.
+        scene: String,
+        /// What is wrong.
+        what: String,
+    },
+    /// A parameter is unknown or out of range.
+    #[error("{0}")]
+    Param(String),
+    /// A resource limit would be exceeded.
+    #[error("{0}")]
+    Limit(String),
+    /// Writing an output failed.
+    #[error("cannot write {path}: {what}")]
+    Output {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        what: String,
+    },
+}
+
+impl Error {
+    /// A parameter error.
+    pub fn param(msg: impl Into<String>) -> Self {
+        Error::Param(msg.into())
+    }
+
+    /// A format error for `path`.
+    pub fn format(path: impl Into<PathBuf>, what: impl Into<String>) -> Self {
+        Error::Format {
+            path: path.into(),
+            what: what.into(),
+        }
+    }
+
+    /// True when the error is the user's input (exit code 2), false for other failures.
+    pub fn is_bad_input(&self) -> bool {
+        !matches!(self, Error::Output { .. })
+    }
+}

@@ -1,0 +1,309 @@
+//! Vectors, matrices (named destination-from-source: `clip_from_world`), bounds and the
+//! exact geometric predicates shared by the rasterizer, the reference and the techniques.
+
+pub use glam::{vec2, vec3, vec4, DVec3, Mat3, Mat4, UVec2, Vec2, Vec3, Vec3A, Vec4};
+
+/// An axis-aligned bounding box. The empty box has `min = +inf`, `max = -inf`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Smallest corner.
+    pub min: Vec3,
+    /// Largest corner.
+    pub max: Vec3,
+}
+
+impl Default for Aabb {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
+impl Aabb {
+    /// The empty box (grows to the first point added).
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+
+    /// The box around `points`.
+    pub fn from_points<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> Self {
+        let mut b = Self::EMPTY;
+        for p in points {
+            b.grow(*p);
+        }
+        b
+    }
+
+    /// Grows the box to hold `p`.
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// The union of two boxes.
+    pub fn union(&self, o: &Aabb) -> Aabb {
+        Aabb {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    /// True when nothing was added.
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x
+    }
+
+    /// Centre of the box.
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Length of the diagonal.
+    pub fn diagonal(&self) -> f32 {
+        (self.max - self.min).length()
+    }
+
+    /// The eight corners.
+    pub fn corners(&self) -> [Vec3; 8] {
+        let (a, b) = (self.min, self.max);
+        [
+            vec3(a.x, a.y, a.z),
+            vec3(b.x, a.y, a.z),
+            vec3(a.x, b.y, a.z),
+            vec3(b.x, b.y, a.z),
+            vec3(a.x, a.y, b.z),
+            vec3(b.x, a.y, b.z),
+            vec3(a.x, b.y, b.z),
+            vec3(b.x, b.y, b.z),
+        ]
+    }
+}
+
+/// pbrt's γ(n) = nε/(1−nε): a bound on the relative error of n floating-point operations.
+pub fn gamma(n: i32) -> f32 {
+    let e = f32::EPSILON * 0.5 * n as f32;
+    e / (1.0 - e)
+}
+
+/// A ray–triangle hit: distance and barycentrics of `v0, v1, v2`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleHit {
+    /// Distance along the ray (in units of the direction's length).
+    pub t: f32,
+    /// Barycentric weights of the three vertices.
+    pub b: [f32; 3],
+}
+
+/// Watertight ray–triangle intersection (Woop, Benthin & Wald 2013): no ray passes
+/// between two triangles that share an edge, and the answer is a pure function of the
+/// inputs, so the BVH reference and a brute-force loop agree exactly. Hits with
+/// `t` outside `(t_min, t_max)` are rejected. Both faces are hit.
+#[inline]
+pub fn intersect_triangle(
+    origin: Vec3,
+    dir: Vec3,
+    t_min: f32,
+    t_max: f32,
+    v: [Vec3; 3],
+) -> Option<TriangleHit> {
+    // Permute axes so that the ray's largest direction component is z.
+    let kz = dir.abs().max_position();
+    let mut kx = (kz + 1) % 3;
+    let mut ky = (kx + 1) % 3;
+    if dir[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky);
+    }
+    let sz = 1.0 / dir[kz];
+    let sx = dir[kx] * sz;
+    let sy = dir[ky] * sz;
+    let a = v[0] - origin;
+    let b = v[1] - origin;
+    let c = v[2] - origin;
+    // Shear the vertices into the ray's space.
+    let ax = a[kx] - sx * a[kz];
+    let ay = a[ky] - sy * a[kz];
+    let bx = b[kx] - sx * b[kz];
+    let by = b[ky] - sy * b[kz];
+    let cx = c[kx] - sx * c[kz];
+    let cy = c[ky] - sy * c[kz];
+    let mut u = cx * by - cy * bx;
+    let mut w = ax * cy - ay * cx;
+    let mut x = bx * ay - by * ax;
+    // Fall back to double precision on the edges, where f32 cannot decide the sign.
+    if u == 0.0 || w == 0.0 || x == 0.0 {
+        u = (cx as f64 * by as f64 - cy as f64 * bx as f64) as f32;
+        w = (ax as f64 * cy as f64 - ay as f64 * cx as f64) as f32;
+        x = (bx as f64 * ay as f64 - by as f64 * ax as f64) as f32;
+    }
+    if (u < 0.0 || w < 0.0 || x < 0.0) && (u > 0.0 || w > 0.0 || x > 0.0) {
+        return None;
+    }
+    let det = u + w + x;
+    if det == 0.0 {
+        return None;
+    }
+    let az = sz * a[kz];
+    let bz = sz * b[kz];
+    let cz = sz * c[kz];
+    let t_scaled = u * az + w * bz + x * cz;
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    if !(t > t_min && t < t_max) {
+        return None;
+    }
+    Some(TriangleHit {
+        t,
+        b: [u * inv_det, w * inv_det, x * inv_det],
+    })
+}
+
+/// Barycentric coordinates of the point where the line `origin + t·dir` meets the plane of
+/// the triangle, with no inside test (the rasterizer already decided coverage).
+/// Returns `None` when the line is parallel to the plane.
+pub fn intersect_plane(origin: Vec3, dir: Vec3, v: [Vec3; 3]) -> Option<TriangleHit> {
+    let e1 = v[1] - v[0];
+    let e2 = v[2] - v[0];
+    let p = dir.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = origin - v[0];
+    let b1 = s.dot(p) * inv;
+    let q = s.cross(e1);
+    let b2 = dir.dot(q) * inv;
+    let t = e2.dot(q) * inv;
+    Some(TriangleHit {
+        t,
+        b: [1.0 - b1 - b2, b1, b2],
+    })
+}
+
+/// A point on a surface with a conservative bound on its floating-point error, so a ray
+/// leaving it can be offset just past the error (pbrt's `OffsetRayOrigin`) instead of by a
+/// fixed epsilon that depends on the scene's units.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    /// The point.
+    pub p: Vec3,
+    /// Per-axis absolute error bound of `p`.
+    pub error: Vec3,
+}
+
+impl SurfacePoint {
+    /// The point at barycentrics `b` of triangle `v`, with pbrt's error bound
+    /// γ(7)·Σ|bᵢvᵢ|, widened to cover barycentrics computed from an intersection.
+    pub fn from_barycentrics(v: [Vec3; 3], b: [f32; 3]) -> Self {
+        let p = v[0] * b[0] + v[1] * b[1] + v[2] * b[2];
+        let mag = (v[0] * b[0]).abs() + (v[1] * b[1]).abs() + (v[2] * b[2]).abs();
+        // The barycentrics themselves carry a few ulps of error relative to the vertex
+        // magnitudes; γ(16) on the vertex magnitudes covers it.
+        let vmag = v[0].abs().max(v[1].abs()).max(v[2].abs());
+        SurfacePoint {
+            p,
+            error: mag * gamma(7) + vmag * gamma(16),
+        }
+    }
+
+    /// A ray origin offset from the surface along `n` (unit face normal) towards `w`,
+    /// far enough that the ray cannot re-hit the surface it leaves.
+    pub fn offset_origin(&self, n: Vec3, w: Vec3) -> Vec3 {
+        let d = n.abs().dot(self.error);
+        let mut offset = n * d;
+        if w.dot(n) < 0.0 {
+            offset = -offset;
+        }
+        let mut po = self.p + offset;
+        // Round away from p so the offset is not lost to rounding.
+        for i in 0..3 {
+            if offset[i] > 0.0 {
+                po[i] = po[i].next_up();
+            } else if offset[i] < 0.0 {
+                po[i] = po[i].next_down();
+            }
+        }
+        po
+    }
+}
+
+/// Sign-exact 2D orientation of integer points: twice the signed area of (a, b, c).
+#[inline]
+pub fn orient2d_i64(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> i64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn watertight_shared_edge_is_hit_once_or_twice_never_missed() {
+        // Rays through the shared diagonal of a quad must hit at least one triangle.
+        let q = [
+            vec3(0.0, 0.0, 0.0),
+            vec3(1.0, 0.0, 0.0),
+            vec3(1.0, 1.0, 0.0),
+            vec3(0.0, 1.0, 0.0),
+        ];
+        for i in 0..1000 {
+            let s = i as f32 / 1000.0;
+            let o = vec3(s, s, 1.0);
+            let d = vec3(0.0, 0.0, -1.0);
+            let a = intersect_triangle(o, d, 0.0, f32::INFINITY, [q[0], q[1], q[2]]);
+            let b = intersect_triangle(o, d, 0.0, f32::INFINITY, [q[0], q[2], q[3]]);
+            assert!(a.is_some() || b.is_some(), "ray {s} slipped through");
+        }
+    }
+
+    #[test]
+    fn plane_intersection_matches_triangle_intersection_inside() {
+        let v = [vec3(0.0, 0.0, 0.0), vec3(2.0, 0.0, 0.0), vec3(0.0, 2.0, 1.0)];
+        let o = vec3(0.3, 0.4, 5.0);
+        let d = vec3(0.01, -0.02, -1.0);
+        let a = intersect_triangle(o, d, 0.0, f32::INFINITY, v).unwrap();
+        let b = intersect_plane(o, d, v).unwrap();
+        assert!((a.t - b.t).abs() < 1e-5);
+    }
+}
+
+/// World-to-view matrix of an eye at `eye` looking at `target`: right-handed view space,
+/// looking down −Z with +Y up.
+pub fn look_at_rh(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
+    let f = (target - eye).normalize();
+    let s = f.cross(up).normalize();
+    let u = s.cross(f);
+    Mat4::from_cols(
+        vec4(s.x, u.x, -f.x, 0.0),
+        vec4(s.y, u.y, -f.y, 0.0),
+        vec4(s.z, u.z, -f.z, 0.0),
+        vec4(-eye.dot(s), -eye.dot(u), eye.dot(f), 1.0),
+    )
+}
+
+/// View-to-clip perspective projection (right-handed view space, depth in `[0, 1]`, clip
+/// `w` = view depth). `fov_y` in radians.
+pub fn perspective_rh(fov_y: f32, aspect: f32, near: f32, far: f32) -> Mat4 {
+    let h = 1.0 / (0.5 * fov_y).tan();
+    let w = h / aspect;
+    let r = far / (near - far);
+    Mat4::from_cols(
+        vec4(w, 0.0, 0.0, 0.0),
+        vec4(0.0, h, 0.0, 0.0),
+        vec4(0.0, 0.0, r, -1.0),
+        vec4(0.0, 0.0, r * near, 0.0),
+    )
+}
+
+/// View-to-clip orthographic projection (right-handed view space, depth in `[0, 1]`).
+pub fn orthographic_rh(left: f32, right: f32, bottom: f32, top: f32, near: f32, far: f32) -> Mat4 {
+    let rw = 1.0 / (right - left);
+    let rh = 1.0 / (top - bottom);
+    let r = 1.0 / (near - far);
+    Mat4::from_cols(
+        vec4(2.0 * rw, 0.0, 0.0, 0.0),
+        vec4(0.0, 2.0 * rh, 0.0, 0.0),
+        vec4(0.0, 0.0, r, 0.0),
+        vec4(-(left + right) * rw, -(top + bottom) * rh, r * near, 1.0),
+    )
+}

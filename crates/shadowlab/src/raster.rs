@@ -1,0 +1,561 @@
+//! The one rasterizer: the camera pass and every light-space map go through it.
+//!
+//! Tiled and multi-threaded: triangles are clipped in homogeneous space (near, far and a
+//! guard band), snapped to a fixed-point grid of 1/256 pixel, binned into 64×64 tiles,
+//! and each tile is rasterized by one thread, visiting its triangles in index order —
+//! so the output is bit-identical for any thread count. Coverage uses exact integer edge
+//! functions with a top-left fill rule: a pixel centre on an edge shared by two triangles
+//! belongs to exactly one of them (watertight, no double hits). The per-vertex depth
+//! attribute is interpolated perspective-correctly (through 1/w).
+
+use crate::math::{orient2d_i64, Vec4};
+use rayon::prelude::*;
+
+/// Side of a square tile in pixels.
+pub const TILE: u32 = 64;
+/// Sub-pixel precision: 8 fractional bits.
+const SUBPIXEL_BITS: u32 = 8;
+const SUBPIXEL: f32 = (1 << SUBPIXEL_BITS) as f32;
+/// Screen coordinates are kept within ±2¹⁶ pixels by the guard band, so edge functions on
+/// 24-bit fixed-point coordinates fit in i64 with room to spare.
+const GUARD_PIXELS: f32 = 32768.0;
+/// The largest map or image side the rasterizer accepts.
+pub const MAX_RASTER_SIDE: u32 = 32768;
+
+/// A triangle after clipping, projection and snapping, ready to rasterize.
+#[derive(Clone, Copy, Debug)]
+pub struct SetupTriangle {
+    /// Index of the source triangle.
+    pub id: u32,
+    /// Fixed-point screen positions (1/256 pixel).
+    v: [[i64; 2]; 3],
+    /// Per-edge bias implementing the fill rule (0 or −1).
+    bias: [i64; 3],
+    /// Twice the signed area (positive after reordering).
+    area: i64,
+    /// 1/w at each vertex.
+    inv_w: [f32; 3],
+    /// depth/w at each vertex.
+    d_over_w: [f32; 3],
+    /// Pixel bounding box, inclusive min, exclusive max.
+    bbox: [u32; 4],
+}
+
+/// One covered pixel, handed to a tile's fragment function.
+#[derive(Clone, Copy, Debug)]
+pub struct Fragment {
+    /// Pixel column.
+    pub x: u32,
+    /// Pixel row (0 at the top).
+    pub y: u32,
+    /// Source triangle index.
+    pub id: u32,
+    /// Interpolated depth attribute.
+    pub depth: f32,
+}
+
+/// A rectangle of pixels, `[x0, x1) × [y0, y1)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TileRect {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// One past the right column.
+    pub x1: u32,
+    /// One past the bottom row.
+    pub y1: u32,
+}
+
+impl TileRect {
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.x1 - self.x0
+    }
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.y1 - self.y0
+    }
+}
+
+#[derive(Clone, Copy)]
+struct ClipVert {
+    c: Vec4,
+    d: f32,
+}
+
+fn lerp_vert(a: ClipVert, b: ClipVert, t: f32) -> ClipVert {
+    ClipVert {
+        c: a.c + (b.c - a.c) * t,
+        d: a.d + (b.d - a.d) * t,
+    }
+}
+
+/// Clips a polygon against `dist(v) >= 0`. Intersections are always computed from the
+/// inside vertex towards the outside one, so two triangles sharing an edge get the same
+/// clipped vertex on it.
+fn clip_polygon(poly: &[ClipVert], out: &mut Vec<ClipVert>, dist: impl Fn(Vec4) -> f32) {
+    out.clear();
+    let n = poly.len();
+    for i in 0..n {
+        let a = poly[i];
+        let b = poly[(i + 1) % n];
+        let da = dist(a.c);
+        let db = dist(b.c);
+        if da >= 0.0 {
+            out.push(a);
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            let v = if da >= 0.0 {
+                lerp_vert(a, b, da / (da - db))
+            } else {
+                lerp_vert(b, a, db / (db - da))
+            };
+            out.push(v);
+        }
+    }
+}
+
+/// Prepares triangles for rasterization at `width × height`: clip-space vertices and a
+/// per-vertex depth attribute come from `fetch(i)` for `i in 0..count`. Triangles that
+/// are degenerate, outside the view or non-finite produce nothing.
+pub fn setup<F>(count: usize, width: u32, height: u32, fetch: F) -> Vec<SetupTriangle>
+where
+    F: Fn(usize) -> ([Vec4; 3], [f32; 3]) + Sync,
+{
+    const CHUNK: usize = 4096;
+    let chunks: Vec<Vec<SetupTriangle>> = (0..count.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut out = Vec::new();
+            let mut a = Vec::with_capacity(12);
+            let mut b = Vec::with_capacity(12);
+            for i in c * CHUNK..((c + 1) * CHUNK).min(count) {
+                let (clip, d) = fetch(i);
+                setup_one(i as u32, clip, d, width, height, &mut a, &mut b, &mut out);
+            }
+            out
+        })
+        .collect();
+    chunks.concat()
+}
+
+#[allow(clippy::too_many_arguments)]
+fn setup_one(
+    id: u32,
+    clip: [Vec4; 3],
+    d: [f32; 3],
+    width: u32,
+    height: u32,
+    a: &mut Vec<ClipVert>,
+    b: &mut Vec<ClipVert>,
+    out: &mut Vec<SetupTriangle>,
+) {
+    if !clip.iter().all(|c| c.is_finite()) || !d.iter().all(|x| x.is_finite()) {
+        return;
+    }
+    let gx = (GUARD_PIXELS / width as f32).max(1.0);
+    let gy = (GUARD_PIXELS / height as f32).max(1.0);
+    // Trivial reject against each plane; trivial accept when inside all.
+    let planes: [&dyn Fn(Vec4) -> f32; 6] = [
+        &|c: Vec4| c.z,
+        &|c: Vec4| c.w - c.z,
+        &|c: Vec4| c.x + gx * c.w,
+        &|c: Vec4| gx * c.w - c.x,
+        &|c: Vec4| c.y + gy * c.w,
+        &|c: Vec4| gy * c.w - c.y,
+    ];
+    let mut inside_all = true;
+    for p in &planes {
+        let ds = clip.map(|c| p(c));
+        if ds.iter().all(|&x| x < 0.0) {
+            return;
+        }
+        if ds.iter().any(|&x| x < 0.0) {
+            inside_all = false;
+        }
+    }
+    a.clear();
+    for k in 0..3 {
+        a.push(ClipVert { c: clip[k], d: d[k] });
+    }
+    if !inside_all {
+        for p in &planes {
+            clip_polygon(a, b, p);
+            std::mem::swap(a, b);
+            if a.len() < 3 {
+                return;
+            }
+        }
+    }
+    // Project and snap every polygon vertex once, then fan-triangulate.
+    let mut verts = [([0i64; 2], 0f32, 0f32); 12];
+    let n = a.len().min(12);
+    for k in 0..n {
+        let v = a[k];
+        let iw = 1.0 / v.c.w;
+        let sx = (v.c.x * iw * 0.5 + 0.5) * width as f32;
+        let sy = (0.5 - v.c.y * iw * 0.5) * height as f32;
+        let fx = (sx * SUBPIXEL).round() as i64;
+        let fy = (sy * SUBPIXEL).round() as i64;
+        verts[k] = ([fx, fy], iw, v.d * iw);
+    }
+    for k in 1..n - 1 {
+        push_triangle(id, [verts[0], verts[k], verts[k + 1]], width, height, out);
+    }
+}
+
+fn push_triangle(id: u32, mut t: [([i64; 2], f32, f32); 3], width: u32, height: u32, out: &mut Vec<SetupTriangle>) {
+    let mut area = orient2d_i64(t[0].0, t[1].0, t[2].0);
+    if area == 0 {
+        return;
+    }
+    if area < 0 {
+        t.swap(1, 2);
+        area = -area;
+    }
+    let v = [t[0].0, t[1].0, t[2].0];
+    // Edge k is opposite vertex k: from v[k+1] to v[k+2]. With positive area in y-down
+    // coordinates, an edge owns the pixel centres exactly on it when it is a "top" edge
+    // (horizontal, pointing right... in this orientation, dy == 0 and dx < 0) or a "left"
+    // edge (dy > 0). Reversing an edge flips the answer, so exactly one of the two
+    // triangles sharing an edge owns each point on it.
+    let mut bias = [0i64; 3];
+    for k in 0..3 {
+        let a = v[(k + 1) % 3];
+        let b = v[(k + 2) % 3];
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let owner = dy > 0 || (dy == 0 && dx < 0);
+        bias[k] = if owner { 0 } else { -1 };
+    }
+    let s = SUBPIXEL as i64;
+    let minx = v.iter().map(|p| p[0]).min().unwrap();
+    let maxx = v.iter().map(|p| p[0]).max().unwrap();
+    let miny = v.iter().map(|p| p[1]).min().unwrap();
+    let maxy = v.iter().map(|p| p[1]).max().unwrap();
+    // Pixel centres at (px + 0.5): covered columns satisfy px*s + s/2 in [minx, maxx].
+    let px0 = (minx - s / 2).div_euclid(s) + 1;
+    let px1 = (maxx - s / 2).div_euclid(s) + 1;
+    let py0 = (miny - s / 2).div_euclid(s) + 1;
+    let py1 = (maxy - s / 2).div_euclid(s) + 1;
+    let clampx = |x: i64| x.clamp(0, width as i64) as u32;
+    let clampy = |y: i64| y.clamp(0, height as i64) as u32;
+    let bbox = [clampx(px0), clampy(py0), clampx(px1), clampy(py1)];
+    if bbox[0] >= bbox[2] || bbox[1] >= bbox[3] {
+        return;
+    }
+    out.push(SetupTriangle {
+        id,
+        v,
+        bias,
+        area,
+        inv_w: [t[0].1, t[1].1, t[2].1],
+        d_over_w: [t[0].2, t[1].2, t[2].2],
+        bbox,
+    });
+}
+
+/// Bins set-up triangles into tiles; each bin lists triangle positions in order.
+fn bin(tris: &[SetupTriangle], tiles_x: u32, tiles_y: u32) -> Vec<Vec<u32>> {
+    let mut bins = vec![Vec::new(); (tiles_x * tiles_y) as usize];
+    for (k, t) in tris.iter().enumerate() {
+        let tx0 = t.bbox[0] / TILE;
+        let ty0 = t.bbox[1] / TILE;
+        let tx1 = (t.bbox[2] - 1) / TILE;
+        let ty1 = (t.bbox[3] - 1) / TILE;
+        for ty in ty0..=ty1 {
+            for tx in tx0..=tx1 {
+                bins[(ty * tiles_x + tx) as usize].push(k as u32);
+            }
+        }
+    }
+    bins
+}
+
+/// Rasterizes `tris` over a `width × height` target. For each 64×64 tile (in parallel),
+/// `new_state` makes the tile's state and `fragment` is called for each covered pixel of
+/// each triangle, triangles in index order. Returns every tile's rectangle and state.
+pub fn rasterize<S, N, F>(tris: &[SetupTriangle], width: u32, height: u32, new_state: N, fragment: F) -> Vec<(TileRect, S)>
+where
+    S: Send,
+    N: Fn(TileRect) -> S + Sync,
+    F: Fn(&mut S, &TileRect, Fragment) + Sync,
+{
+    let tiles_x = width.div_ceil(TILE);
+    let tiles_y = height.div_ceil(TILE);
+    let bins = bin(tris, tiles_x, tiles_y);
+    bins.par_iter()
+        .enumerate()
+        .map(|(k, list)| {
+            let tx = k as u32 % tiles_x;
+            let ty = k as u32 / tiles_x;
+            let rect = TileRect {
+                x0: tx * TILE,
+                y0: ty * TILE,
+                x1: ((tx + 1) * TILE).min(width),
+                y1: ((ty + 1) * TILE).min(height),
+            };
+            let mut state = new_state(rect);
+            for &ti in list {
+                raster_triangle(&tris[ti as usize], &rect, &mut |f| fragment(&mut state, &rect, f));
+            }
+            (rect, state)
+        })
+        .collect()
+}
+
+#[inline]
+fn raster_triangle(t: &SetupTriangle, rect: &TileRect, emit: &mut impl FnMut(Fragment)) {
+    let x0 = t.bbox[0].max(rect.x0);
+    let x1 = t.bbox[2].min(rect.x1);
+    let y0 = t.bbox[1].max(rect.y0);
+    let y1 = t.bbox[3].min(rect.y1);
+    if x0 >= x1 || y0 >= y1 {
+        return;
+    }
+    let s = SUBPIXEL as i64;
+    let v = t.v;
+    // Edge function k at point p: orient2d(v[k+1], v[k+2], p), stepped incrementally.
+    let mut a = [0i64; 3];
+    let mut b = [0i64; 3];
+    let mut row = [0i64; 3];
+    let p0 = [x0 as i64 * s + s / 2, y0 as i64 * s + s / 2];
+    for k in 0..3 {
+        let va = v[(k + 1) % 3];
+        let vb = v[(k + 2) % 3];
+        // orient(va, vb, p) = (vb.x-va.x)(p.y-va.y) - (vb.y-va.y)(p.x-va.x)
+        a[k] = -(vb[1] - va[1]) * s; // per +1 pixel in x
+        b[k] = (vb[0] - va[0]) * s; // per +1 pixel in y
+        row[k] = orient2d_i64(va, vb, p0) + t.bias[k];
+    }
+    let inv_area = 1.0 / t.area as f64;
+    for y in y0..y1 {
+        let mut e = row;
+        for x in x0..x1 {
+            if (e[0] | e[1] | e[2]) >= 0 {
+                // Remove the fill-rule bias before using the edge values as weights.
+                let w0 = ((e[0] - t.bias[0]) as f64 * inv_area) as f32;
+                let w1 = ((e[1] - t.bias[1]) as f64 * inv_area) as f32;
+                let w2 = 1.0 - w0 - w1;
+                let inv_w = w0 * t.inv_w[0] + w1 * t.inv_w[1] + w2 * t.inv_w[2];
+                let dw = w0 * t.d_over_w[0] + w1 * t.d_over_w[1] + w2 * t.d_over_w[2];
+                emit(Fragment {
+                    x,
+                    y,
+                    id: t.id,
+                    depth: dw / inv_w,
+                });
+            }
+            for k in 0..3 {
+                e[k] += a[k];
+            }
+        }
+        for k in 0..3 {
+            row[k] += b[k];
+        }
+    }
+}
+
+/// A depth buffer with the id of the nearest triangle per pixel.
+#[derive(Clone, Debug)]
+pub struct DepthBuffer {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Nearest depth per pixel (`+inf` where empty), row-major from the top row.
+    pub depth: Vec<f32>,
+    /// Triangle id per pixel ([`NO_TRIANGLE`] where empty).
+    pub id: Vec<u32>,
+}
+
+/// Marks a pixel that no triangle covers.
+pub const NO_TRIANGLE: u32 = u32::MAX;
+
+impl DepthBuffer {
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        self.depth.len() * 4 + self.id.len() * 4
+    }
+}
+
+/// Rasterizes the nearest surface (smallest depth attribute; ties keep the lower
+/// triangle index) into a depth and id buffer.
+pub fn depth_buffer(tris: &[SetupTriangle], width: u32, height: u32) -> DepthBuffer {
+    let tiles = rasterize(
+        tris,
+        width,
+        height,
+        |r| {
+            let n = (r.width() * r.height()) as usize;
+            (vec![f32::INFINITY; n], vec![NO_TRIANGLE; n])
+        },
+        |(d, id): &mut (Vec<f32>, Vec<u32>), r, f| {
+            let k = ((f.y - r.y0) * r.width() + (f.x - r.x0)) as usize;
+            if f.depth < d[k] {
+                d[k] = f.depth;
+                id[k] = f.id;
+            }
+        },
+    );
+    let n = width as usize * height as usize;
+    let mut out = DepthBuffer {
+        width,
+        height,
+        depth: vec![f32::INFINITY; n],
+        id: vec![NO_TRIANGLE; n],
+    };
+    for (r, (d, id)) in tiles {
+        for y in r.y0..r.y1 {
+            let src = ((y - r.y0) * r.width()) as usize;
+            let dst = (y * width + r.x0) as usize;
+            let w = r.width() as usize;
+            out.depth[dst..dst + w].copy_from_slice(&d[src..src + w]);
+            out.id[dst..dst + w].copy_from_slice(&id[src..src + w]);
+        }
+    }
+    out
+}
+
+/// How many fragments each pixel received (for coverage tests and overdraw pictures).
+pub fn coverage_count(tris: &[SetupTriangle], width: u32, height: u32) -> Vec<u32> {
+    let tiles = rasterize(
+        tris,
+        width,
+        height,
+        |r| vec![0u32; (r.width() * r.height()) as usize],
+        |c: &mut Vec<u32>, r, f| c[((f.y - r.y0) * r.width() + (f.x - r.x0)) as usize] += 1,
+    );
+    let mut out = vec![0u32; width as usize * height as usize];
+    for (r, c) in tiles {
+        for y in r.y0..r.y1 {
+            for x in r.x0..r.x1 {
+                out[(y * width + x) as usize] = c[((y - r.y0) * r.width() + (x - r.x0)) as usize];
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::{vec3, Mat4, Vec3};
+
+    /// A tiny deterministic generator so the tests need no extra crate.
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+        }
+    }
+
+    fn tessellated_quad(rng: &mut Lcg, n: usize) -> Vec<[Vec3; 3]> {
+        // A grid of jittered vertices over [-1,1]², split into triangles along random
+        // diagonals; the outer boundary stays the square.
+        let mut pts = vec![Vec3::ZERO; (n + 1) * (n + 1)];
+        for j in 0..=n {
+            for i in 0..=n {
+                let mut x = i as f32 / n as f32 * 2.0 - 1.0;
+                let mut y = j as f32 / n as f32 * 2.0 - 1.0;
+                if i > 0 && i < n {
+                    x += (rng.next() - 0.5) * 1.6 / n as f32;
+                }
+                if j > 0 && j < n {
+                    y += (rng.next() - 0.5) * 1.6 / n as f32;
+                }
+                pts[j * (n + 1) + i] = vec3(x, y, 0.0);
+            }
+        }
+        let mut tris = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let a = pts[j * (n + 1) + i];
+                let b = pts[j * (n + 1) + i + 1];
+                let c = pts[(j + 1) * (n + 1) + i];
+                let d = pts[(j + 1) * (n + 1) + i + 1];
+                if rng.next() < 0.5 {
+                    tris.push([a, b, d]);
+                    tris.push([a, d, c]);
+                } else {
+                    tris.push([a, b, c]);
+                    tris.push([b, d, c]);
+                }
+            }
+        }
+        tris
+    }
+
+    #[test]
+    fn closed_quad_covers_each_pixel_exactly_once() {
+        let mut rng = Lcg(7);
+        for trial in 0..20 {
+            let n = 2 + (trial % 7) * 3;
+            let tris = tessellated_quad(&mut rng, n);
+            // A random rotation and a perspective view that keeps the whole quad in view.
+            let angle = rng.next() * 6.28;
+            let tilt = (rng.next() - 0.5) * 1.2;
+            let world = Mat4::from_rotation_z(angle) * Mat4::from_rotation_x(tilt);
+            let eye = vec3(0.0, 0.0, 5.0);
+            let clip_from_world = crate::math::perspective_rh(0.9, 1.3, 0.1, 100.0) * crate::math::look_at_rh(eye, Vec3::ZERO, Vec3::Y);
+            let (w, h) = (157, 121);
+            let world_tris: Vec<[Vec3; 3]> = tris.iter().map(|t| t.map(|p| world.transform_point3(p))).collect();
+            let setups = setup(world_tris.len(), w, h, |i| {
+                let t = world_tris[i];
+                (t.map(|p| clip_from_world * p.extend(1.0)), [0.0; 3])
+            });
+            let counts = coverage_count(&setups, w, h);
+            // Reference coverage: pixel centres strictly inside the projected square.
+            let corners: Vec<[f64; 2]> = [vec3(-1.0, -1.0, 0.0), vec3(1.0, -1.0, 0.0), vec3(1.0, 1.0, 0.0), vec3(-1.0, 1.0, 0.0)]
+                .iter()
+                .map(|p| {
+                    let c = clip_from_world * world.transform_point3(*p).extend(1.0);
+                    [((c.x / c.w) as f64 * 0.5 + 0.5) * w as f64, (0.5 - (c.y / c.w) as f64 * 0.5) * h as f64]
+                })
+                .collect();
+            let mut inside_px = 0;
+            for y in 0..h {
+                for x in 0..w {
+                    let p = [x as f64 + 0.5, y as f64 + 0.5];
+                    let mut sgn = [false; 4];
+                    let mut dmin = f64::INFINITY;
+                    for k in 0..4 {
+                        let a = corners[k];
+                        let b = corners[(k + 1) % 4];
+                        let cr = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
+                        let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+                        dmin = dmin.min((cr / len).abs());
+                        sgn[k] = cr > 0.0;
+                    }
+                    let c = counts[(y * w + x) as usize];
+                    assert!(c <= 1, "trial {trial}: pixel {x},{y} covered {c} times");
+                    if dmin < 0.01 {
+                        continue; // on the outer boundary: either answer is right
+                    }
+                    let inside = sgn.iter().all(|&s| s) || sgn.iter().all(|&s| !s);
+                    assert_eq!(c == 1, inside, "trial {trial}: pixel {x},{y} inside={inside} count={c}");
+                    inside_px += inside as u32;
+                }
+            }
+            assert!(inside_px > 100, "quad too small to test");
+        }
+    }
+
+    #[test]
+    fn clipped_triangles_stay_watertight() {
+        // A quad crossing the near plane and the guard band, split along its diagonal.
+        let q = [vec3(-50.0, -1.0, 4.9), vec3(50.0, -1.0, 4.9), vec3(50.0, -1.0, -500.0), vec3(-50.0, -1.0, -500.0)];
+        let tris = [[q[0], q[1], q[2]], [q[0], q[2], q[3]]];
+        let clip_from_world = crate::math::perspective_rh(1.0, 1.0, 0.1, 1000.0) * crate::math::look_at_rh(vec3(0.0, 0.0, 5.0), vec3(0.0, -0.2, 0.0), Vec3::Y);
+        let setups = setup(2, 200, 200, |i| (tris[i].map(|p| clip_from_world * p.extend(1.0)), [0.0; 3]));
+        let counts = coverage_count(&setups, 200, 200);
+        assert!(counts.iter().all(|&c| c <= 1));
+        // The floor fills the bottom half of the image with no holes.
+        for y in 120..200 {
+            for x in 0..200 {
+                assert_eq!(counts[y * 200 + x], 1, "hole at {x},{y}");
+            }
+        }
+    }
+}

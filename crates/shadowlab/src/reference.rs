@@ -1,0 +1,286 @@
+//! The ground truth: ray-traced visibility through a BVH (the `obvhs` crate's compressed
+//! wide BVH, built with PLOC).
+//!
+//! A shadow ray leaves each visible point towards the light; its origin is offset along
+//! the face normal by the floating-point error bound of the point (pbrt's
+//! `OffsetRayOrigin`), never by a fixed epsilon, and the triangle the point lies on is
+//! skipped, so the reference has no acne in any unit system. Intersections use the
+//! watertight test of [`crate::math::intersect_triangle`], shared with the brute-force
+//! check, so the BVH and a loop over all triangles return the same answer. Semi-transparent
+//! casters multiply their RGB transmittance; the product is taken in triangle-index order
+//! so it is bit-identical whatever order the BVH visits them in.
+
+use crate::light::Light;
+use crate::math::{intersect_triangle, SurfacePoint, Vec2, Vec3, Vec3A};
+use crate::scene::Scene;
+use crate::techniques::{Frame, Visibility};
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::Ray;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// A BVH over a scene's triangles, ready to trace.
+pub struct Reference<'s> {
+    scene: &'s Scene,
+    bvh: CwBvh,
+    /// BVH build time in milliseconds.
+    pub build_ms: f64,
+}
+
+/// The closest surface along a ray.
+#[derive(Clone, Copy, Debug)]
+pub struct PrimaryHit {
+    /// Triangle index.
+    pub triangle: u32,
+    /// The hit point with its error bound.
+    pub point: SurfacePoint,
+    /// Ray parameter.
+    pub t: f32,
+}
+
+impl<'s> Reference<'s> {
+    /// Builds the BVH over every triangle of `scene`.
+    pub fn build(scene: &'s Scene) -> Self {
+        let t0 = Instant::now();
+        let tris: Vec<obvhs::triangle::Triangle> = (0..scene.len())
+            .map(|i| {
+                let t = scene.triangle(i);
+                obvhs::triangle::Triangle {
+                    v0: t[0].into(),
+                    v1: t[1].into(),
+                    v2: t[2].into(),
+                }
+            })
+            .collect();
+        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+            &tris,
+            obvhs::BvhBuildParams::fast_build(),
+            &mut std::time::Duration::default(),
+        );
+        Reference {
+            scene,
+            bvh,
+            build_ms: t0.elapsed().as_secs_f64() * 1e3,
+        }
+    }
+
+    /// Bytes held by the BVH.
+    pub fn memory_bytes(&self) -> usize {
+        self.bvh.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>() + self.bvh.primitive_indices.len() * 4
+    }
+
+    /// RGB transmittance from the surface point `sp` (on triangle `own`, unit face normal
+    /// `n` turned towards the viewer) to the light: 0 when the light does not reach the
+    /// viewed side at all, else the product over every caster between.
+    pub fn transmittance(&self, light: &Light, sp: &SurfacePoint, n: Vec3, own: u32) -> Vec3 {
+        if !light.illuminates(sp.p, n) {
+            return Vec3::ZERO;
+        }
+        let (l, _) = light.shadow_ray(sp.p);
+        let o = sp.offset_origin(n, l);
+        let (dir, t_max) = light.shadow_ray(o);
+        self.occlusion(o, dir, t_max, own)
+    }
+
+    /// Transmittance along the segment `o + t·dir`, `t ∈ (0, t_max)`, skipping triangle `own`.
+    pub fn occlusion(&self, o: Vec3, dir: Vec3, t_max: f32, own: u32) -> Vec3 {
+        let scene = self.scene;
+        let ray = Ray::new(Vec3A::from(o), Vec3A::from(dir), 0.0, t_max);
+        let prim = &self.bvh.primitive_indices;
+        if !scene.has_transparency() {
+            let miss = self.bvh.ray_traverse_miss(ray, |_, id| {
+                let tri = prim[id];
+                if tri == own {
+                    return f32::INFINITY;
+                }
+                intersect_triangle(o, dir, 0.0, t_max, scene.triangle(tri as usize))
+                    .map_or(f32::INFINITY, |h| h.t)
+            });
+            return if miss { Vec3::ONE } else { Vec3::ZERO };
+        }
+        let mut hits: Vec<u32> = Vec::new();
+        let mut opaque = false;
+        self.bvh.ray_traverse_anyhit(ray, |_, id| {
+            let tri = prim[id];
+            if opaque || tri == own {
+                return;
+            }
+            if intersect_triangle(o, dir, 0.0, t_max, scene.triangle(tri as usize)).is_some() {
+                if scene.material_of(tri as usize).is_opaque() {
+                    opaque = true;
+                } else {
+                    hits.push(tri);
+                }
+            }
+        });
+        if opaque {
+            return Vec3::ZERO;
+        }
+        product_in_index_order(scene, &mut hits)
+    }
+
+    /// The closest triangle along `o + t·dir` for `t > 0`; ties go to the lower index.
+    pub fn closest_hit(&self, o: Vec3, dir: Vec3) -> Option<PrimaryHit> {
+        let scene = self.scene;
+        let ray = Ray::new_inf(Vec3A::from(o), Vec3A::from(dir));
+        let prim = &self.bvh.primitive_indices;
+        let mut best: Option<(f32, u32, [f32; 3])> = None;
+        self.bvh.ray_traverse(ray, &mut obvhs::ray::RayHit::none(), |_, id| {
+            let tri = prim[id];
+            match intersect_triangle(o, dir, 0.0, f32::INFINITY, scene.triangle(tri as usize)) {
+                Some(h) => {
+                    let better = match best {
+                        None => true,
+                        Some((bt, bi, _)) => h.t < bt || (h.t == bt && tri < bi),
+                    };
+                    if better {
+                        best = Some((h.t, tri, h.b));
+                    }
+                    // Keep the traversal interval open at the current best so equal-t
+                    // candidates are still visited for the tie-break.
+                    best.map_or(f32::INFINITY, |b| b.0.next_up())
+                }
+                None => f32::INFINITY,
+            }
+        });
+        best.map(|(t, tri, b)| PrimaryHit {
+            triangle: tri,
+            point: SurfacePoint::from_barycentrics(scene.triangle(tri as usize), b),
+            t,
+        })
+    }
+
+    /// The reference visibility of a frame. With `samples` of one position, the camera
+    /// pass's samples are traced; with more, each pixel re-traces primary rays through
+    /// the given sub-pixel positions and averages the shadow terms of those that hit a
+    /// surface (pixels whose sub-samples all miss keep the centre sample's value).
+    pub fn visibility(&self, frame: &Frame, samples: &[Vec2]) -> Visibility {
+        let view = frame.view;
+        let cam = frame.camera;
+        let light = frame.light;
+        let (w, h) = (view.width, view.height);
+        let rows: Vec<Vec<Vec3>> = (0..h)
+            .into_par_iter()
+            .map(|y| {
+                (0..w)
+                    .map(|x| {
+                        let k = (y * w + x) as usize;
+                        if !view.covered(k) {
+                            return Vec3::ONE;
+                        }
+                        let centre = self.transmittance(light, &view.surface_point(k), view.normal[k], view.triangle[k]);
+                        if samples.len() <= 1 {
+                            return centre;
+                        }
+                        let mut sum = Vec3::ZERO;
+                        let mut count = 0u32;
+                        for s in samples {
+                            let d = cam.ray_direction(x as f32 + s.x, y as f32 + s.y);
+                            if let Some(hit) = self.closest_hit(cam.eye, d) {
+                                let v = self.scene.triangle(hit.triangle as usize);
+                                let mut n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+                                if n.dot(d) > 0.0 {
+                                    n = -n;
+                                }
+                                sum += self.transmittance(light, &hit.point, n, hit.triangle);
+                                count += 1;
+                            }
+                        }
+                        if count == 0 {
+                            centre
+                        } else {
+                            sum / count as f32
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        Visibility {
+            width: w,
+            height: h,
+            value: rows.concat(),
+        }
+    }
+}
+
+fn product_in_index_order(scene: &Scene, hits: &mut [u32]) -> Vec3 {
+    hits.sort_unstable();
+    let mut t = Vec3::ONE;
+    for &h in hits.iter() {
+        t *= scene.material_of(h as usize).transmittance;
+    }
+    t
+}
+
+/// Transmittance along a segment by testing every triangle: the brute-force check of
+/// [`Reference::occlusion`].
+pub fn brute_force_occlusion(scene: &Scene, o: Vec3, dir: Vec3, t_max: f32, own: u32) -> Vec3 {
+    let mut hits = Vec::new();
+    for i in 0..scene.len() {
+        if i as u32 == own {
+            continue;
+        }
+        if intersect_triangle(o, dir, 0.0, t_max, scene.triangle(i)).is_some() {
+            if scene.material_of(i).is_opaque() {
+                return Vec3::ZERO;
+            }
+            hits.push(i as u32);
+        }
+    }
+    product_in_index_order(scene, &mut hits)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::vec3;
+    use crate::scene::Material;
+
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+        }
+        fn v(&mut self) -> Vec3 {
+            vec3(self.next(), self.next(), self.next()) * 2.0 - 1.0
+        }
+    }
+
+    #[test]
+    fn bvh_agrees_exactly_with_brute_force() {
+        let mut rng = Lcg(3);
+        for trial in 0..8 {
+            let mut scene = Scene::new("random");
+            let opaque = scene.add_material(Material::default());
+            let glass = scene.add_material(Material {
+                name: "glass".into(),
+                color: Vec3::ONE,
+                transmittance: vec3(0.9, 0.5, 0.25),
+            });
+            for i in 0..300 {
+                let c = rng.v();
+                let t = [c + rng.v() * 0.3, c + rng.v() * 0.3, c + rng.v() * 0.3];
+                scene.push(t, if trial % 2 == 1 && i % 3 == 0 { glass } else { opaque });
+            }
+            let r = Reference::build(&scene);
+            for _ in 0..2000 {
+                let o = rng.v() * 1.5;
+                let dir = rng.v().normalize();
+                let t_max = if rng.next() < 0.5 { f32::INFINITY } else { rng.next() * 3.0 };
+                let own = (rng.next() * 300.0) as u32;
+                assert_eq!(r.occlusion(o, dir, t_max, own), brute_force_occlusion(&scene, o, dir, t_max, own));
+                let hit = r.closest_hit(o, dir).map(|h| (h.triangle, h.t));
+                let mut brute: Option<(u32, f32)> = None;
+                for i in 0..scene.len() {
+                    if let Some(h) = intersect_triangle(o, dir, 0.0, f32::INFINITY, scene.triangle(i)) {
+                        if brute.is_none_or(|b| h.t < b.1) {
+                            brute = Some((i as u32, h.t));
+                        }
+                    }
+                }
+                assert_eq!(hit, brute);
+            }
+        }
+    }
+}

@@ -1,0 +1,297 @@
+//! Scenes: world-space triangles in structure-of-arrays form, their materials, and the
+//! camera, camera path and light that come with them.
+//!
+//! Loaders (OBJ, PLY, glTF 2.0, the TOML scene format) and the built-in generators of the
+//! papers' test scenes live in the submodules; [`load`] picks one from a scene spec.
+
+pub mod builtin;
+pub mod gltf;
+pub mod obj;
+pub mod ply;
+pub mod toml;
+
+use crate::camera::{Camera, CameraPath, AUTO_VIEW_DIRECTION};
+use crate::error::{Error, Result};
+use crate::light::Light;
+use crate::math::{vec3, Aabb, Mat4, Vec3};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The most triangles a scene may hold; larger scenes are refused before allocation.
+pub const MAX_TRIANGLES: usize = 50_000_000;
+
+/// Surface and shadow-casting properties of a group of triangles.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Material {
+    /// Name (from the file, or given by a generator).
+    pub name: String,
+    /// Diffuse albedo, linear RGB in [0, 1].
+    pub color: Vec3,
+    /// RGB transmittance of light passing *through* the surface: (0,0,0) for an opaque
+    /// caster, (0.9, 0.9, 0.9) for a 10%-opaque one.
+    pub transmittance: Vec3,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            name: "default".into(),
+            color: Vec3::splat(0.8),
+            transmittance: Vec3::ZERO,
+        }
+    }
+}
+
+impl Material {
+    /// An opaque material of colour `color`.
+    pub fn opaque(name: &str, color: Vec3) -> Self {
+        Material {
+            name: name.into(),
+            color,
+            transmittance: Vec3::ZERO,
+        }
+    }
+
+    /// True when the surface blocks all light.
+    pub fn is_opaque(&self) -> bool {
+        self.transmittance == Vec3::ZERO
+    }
+}
+
+/// A triangle soup in world space with per-triangle materials.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// Name of the scene (built-in name or file name).
+    pub name: String,
+    /// First vertex of each triangle.
+    pub v0: Vec<Vec3>,
+    /// Second vertex of each triangle.
+    pub v1: Vec<Vec3>,
+    /// Third vertex of each triangle.
+    pub v2: Vec<Vec3>,
+    /// Index into `materials` of each triangle.
+    pub material: Vec<u32>,
+    /// The materials.
+    pub materials: Vec<Material>,
+    /// Bounds of all vertices (kept current by the methods that add triangles).
+    pub bounds: Aabb,
+    /// The scene's own camera, if it has one.
+    pub camera: Option<Camera>,
+    /// A key-framed camera path for walkthroughs.
+    pub camera_path: Option<CameraPath>,
+    /// The scene's own light, if it has one.
+    pub light: Option<Light>,
+}
+
+impl Scene {
+    /// An empty scene called `name`.
+    pub fn new(name: impl Into<String>) -> Self {
+        Scene {
+            name: name.into(),
+            ..Default::default()
+        }
+    }
+
+    /// A scene from a list of triangles sharing one material; fails on non-finite vertices
+    /// or an empty list.
+    pub fn from_triangles(tris: Vec<[Vec3; 3]>, material: Material) -> Result<Self> {
+        let mut s = Scene::new("triangles");
+        let m = s.add_material(material);
+        for t in tris {
+            s.push(t, m);
+        }
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.v0.len()
+    }
+
+    /// True when the scene has no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.v0.is_empty()
+    }
+
+    /// Adds a material, returning its index.
+    pub fn add_material(&mut self, m: Material) -> u32 {
+        self.materials.push(m);
+        (self.materials.len() - 1) as u32
+    }
+
+    /// Appends one triangle.
+    pub fn push(&mut self, t: [Vec3; 3], material: u32) {
+        self.v0.push(t[0]);
+        self.v1.push(t[1]);
+        self.v2.push(t[2]);
+        self.material.push(material);
+        for p in t {
+            self.bounds.grow(p);
+        }
+    }
+
+    /// Appends indexed triangles transformed by `world_from_mesh`.
+    pub fn push_indexed(&mut self, positions: &[Vec3], indices: &[[u32; 3]], world_from_mesh: Mat4, material: u32) {
+        self.reserve(indices.len());
+        for tri in indices {
+            let t = tri.map(|i| world_from_mesh.transform_point3(positions[i as usize]));
+            self.push(t, material);
+        }
+    }
+
+    /// Reserves room for `n` more triangles.
+    pub fn reserve(&mut self, n: usize) {
+        self.v0.reserve(n);
+        self.v1.reserve(n);
+        self.v2.reserve(n);
+        self.material.reserve(n);
+    }
+
+    /// The vertices of triangle `i`.
+    #[inline]
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        [self.v0[i], self.v1[i], self.v2[i]]
+    }
+
+    /// The material of triangle `i`.
+    #[inline]
+    pub fn material_of(&self, i: usize) -> &Material {
+        &self.materials[self.material[i] as usize]
+    }
+
+    /// True when some triangle lets light through.
+    pub fn has_transparency(&self) -> bool {
+        self.materials.iter().any(|m| !m.is_opaque())
+    }
+
+    /// Appends all triangles of `other` (materials are appended too).
+    pub fn append(&mut self, other: &Scene) {
+        let base = self.materials.len() as u32;
+        self.materials.extend(other.materials.iter().cloned());
+        self.reserve(other.len());
+        for i in 0..other.len() {
+            self.push(other.triangle(i), base + other.material[i]);
+        }
+    }
+
+    /// Recomputes `bounds` from the vertices.
+    pub fn recompute_bounds(&mut self) {
+        let mut b = Aabb::EMPTY;
+        for i in 0..self.len() {
+            for p in self.triangle(i) {
+                b.grow(p);
+            }
+        }
+        self.bounds = b;
+    }
+
+    /// Fails with a sentence naming the problem: no triangles, too many, a non-finite
+    /// vertex, or a bad material.
+    pub fn validate(&self) -> Result<()> {
+        let err = |what: String| Error::Scene {
+            scene: self.name.clone(),
+            what,
+        };
+        if self.is_empty() {
+            return Err(err("it has no triangles".into()));
+        }
+        if self.len() > MAX_TRIANGLES {
+            return Err(Error::Limit(format!(
+                "scene {} has {} triangles, more than the limit of {MAX_TRIANGLES}",
+                self.name,
+                self.len()
+            )));
+        }
+        for i in 0..self.len() {
+            if !self.triangle(i).iter().all(|p| p.is_finite()) {
+                return Err(err(format!("triangle {i} has a non-finite (NaN or infinite) vertex")));
+            }
+            if self.material[i] as usize >= self.materials.len() {
+                return Err(err(format!("triangle {i} names material {} that does not exist", self.material[i])));
+            }
+        }
+        for m in &self.materials {
+            let ok = m.color.is_finite() && m.transmittance.is_finite();
+            if !ok || m.transmittance.min_element() < 0.0 || m.transmittance.max_element() > 1.0 {
+                return Err(err(format!(
+                    "material {:?} has a colour or transmittance outside [0, 1]",
+                    m.name
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Gives a bare mesh what it needs to be looked at, whatever its units: a ground
+    /// plane under it (at its lowest point, 4× its footprint), a camera that frames it
+    /// and a directional light from above, for whichever of camera and light it lacks.
+    pub fn auto_frame(&mut self, add_ground: bool) {
+        let b = self.bounds;
+        let size = (b.max - b.min).max_element().max(1e-6);
+        if add_ground {
+            let c = b.center();
+            let h = size * 2.0;
+            let y = b.min.y - size * 1e-3;
+            let m = self.add_material(Material::opaque("ground", vec3(0.75, 0.75, 0.72)));
+            let (x0, x1, z0, z1) = (c.x - h, c.x + h, c.z - h, c.z + h);
+            self.push([vec3(x0, y, z0), vec3(x0, y, z1), vec3(x1, y, z1)], m);
+            self.push([vec3(x0, y, z0), vec3(x1, y, z1), vec3(x1, y, z0)], m);
+        }
+        if self.camera.is_none() {
+            let c = b.center();
+            let r = (b.max - b.min).length() * 0.5;
+            let fov = 45.0f32;
+            let dist = r / (fov.to_radians() * 0.5).sin() * 1.05;
+            self.camera = Some(Camera::look_at(c + AUTO_VIEW_DIRECTION.normalize() * dist, c, fov, 1024, 768));
+        }
+        if self.light.is_none() {
+            self.light = Some(Light::Directional {
+                to_light: vec3(-0.4, 1.0, 0.3).normalize(),
+            });
+        }
+    }
+}
+
+/// Loads a scene from a spec: a built-in scene name, or a path to a `.toml` scene, an
+/// `.obj`, `.ply`, `.gltf` or `.glb` mesh. `params` are a built-in scene's parameters
+/// (an error for files). Bare meshes are auto-framed; the result is validated.
+pub fn load(spec: &str, params: &BTreeMap<String, String>) -> Result<Scene> {
+    let path = Path::new(spec);
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    let is_file = matches!(ext.as_deref(), Some("obj" | "ply" | "gltf" | "glb" | "toml"));
+    if !is_file {
+        let s = builtin::generate(spec, params)?;
+        s.validate()?;
+        return Ok(s);
+    }
+    if let Some(k) = params.keys().next() {
+        return Err(Error::param(format!(
+            "--scene-param {k} applies to built-in scenes only, not to the file {spec}"
+        )));
+    }
+    let mut s = match ext.as_deref() {
+        Some("obj") => obj::load(path)?,
+        Some("ply") => ply::load(path)?,
+        Some("gltf" | "glb") => gltf::load(path)?,
+        Some("toml") => toml::load(path)?,
+        _ => unreachable!("extension checked above"),
+    };
+    if s.name.is_empty() {
+        s.name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+    }
+    if s.is_empty() {
+        return Err(Error::format(path, "the file holds no triangles"));
+    }
+    let bare = s.camera.is_none() && s.light.is_none() && ext.as_deref() != Some("toml");
+    s.auto_frame(bare);
+    s.validate()?;
+    Ok(s)
+}

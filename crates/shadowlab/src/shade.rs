@@ -1,0 +1,126 @@
+//! Turning a shadow term into pictures: Lambert shading with an ambient term, error
+//! images, depth-map pictures, and the float EXR of the raw visibility.
+
+use crate::error::{Error, Result};
+use crate::light::Light;
+use crate::math::{vec3, Vec3};
+use crate::raster::DepthBuffer;
+use crate::scene::Scene;
+use crate::techniques::Visibility;
+use crate::view::ViewSamples;
+use image::{ImageBuffer, Rgb, Rgba};
+use std::path::Path;
+
+/// Share of the albedo lit by ambient light, so shadowed surfaces stay readable.
+pub const AMBIENT: f32 = 0.25;
+/// Colour of pixels no surface covers.
+pub const BACKGROUND: Vec3 = vec3(0.18, 0.2, 0.24);
+
+/// An 8-bit sRGB image.
+pub type RgbImage = ImageBuffer<Rgb<u8>, Vec<u8>>;
+
+fn to_srgb8(c: Vec3) -> [u8; 3] {
+    c.to_array().map(|x| {
+        let x = x.clamp(0.0, 1.0);
+        let s = if x <= 0.0031308 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+        (s * 255.0 + 0.5) as u8
+    })
+}
+
+/// Shades a frame: `albedo · (ambient + (1 − ambient) · max(0, n·l) · visibility)`.
+pub fn shade(scene: &Scene, view: &ViewSamples, light: &Light, vis: &Visibility) -> RgbImage {
+    let (w, h) = (view.width, view.height);
+    ImageBuffer::from_fn(w, h, |x, y| {
+        let k = (y * w + x) as usize;
+        if !view.covered(k) {
+            return Rgb(to_srgb8(BACKGROUND));
+        }
+        let albedo = scene.material_of(view.triangle[k] as usize).color;
+        let p = view.position[k];
+        let n = view.normal[k];
+        let (l, _) = light.shadow_ray(p);
+        let direct = if light.illuminates(p, n) { n.dot(l).max(0.0) } else { 0.0 };
+        Rgb(to_srgb8(albedo * (AMBIENT + (1.0 - AMBIENT) * direct * vis.value[k])))
+    })
+}
+
+/// A diverging error picture: blue where the technique is darker than the reference, red
+/// where it is lighter, black where they agree; uncovered pixels grey.
+pub fn error_image(view: &ViewSamples, vis: &Visibility, reference: &Visibility) -> RgbImage {
+    let (w, h) = (view.width, view.height);
+    ImageBuffer::from_fn(w, h, |x, y| {
+        let k = (y * w + x) as usize;
+        if !view.covered(k) {
+            return Rgb([40, 40, 40]);
+        }
+        let d = crate::compare::luminance(vis.value[k]) - crate::compare::luminance(reference.value[k]);
+        let m = (d.abs().sqrt() * 255.0) as u8;
+        if d > 0.0 {
+            Rgb([m, 0, 0])
+        } else {
+            Rgb([0, m / 3, m])
+        }
+    })
+}
+
+/// Saves an image as PNG.
+pub fn save_png(img: &RgbImage, path: &Path) -> Result<()> {
+    img.save(path).map_err(|e| Error::Output {
+        path: path.into(),
+        what: e.to_string(),
+    })
+}
+
+/// Writes a depth map as a grey PNG (near = white, empty = black).
+pub fn write_depth_png(path: &Path, map: &DepthBuffer) -> Result<()> {
+    let finite = map.depth.iter().copied().filter(|d| d.is_finite());
+    let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), d| (a.min(d), b.max(d)));
+    let span = (hi - lo).max(1e-20);
+    let img: RgbImage = ImageBuffer::from_fn(map.width, map.height, |x, y| {
+        let d = map.depth[(y * map.width + x) as usize];
+        if !d.is_finite() {
+            return Rgb([0, 0, 0]);
+        }
+        let g = (255.0 - (d - lo) / span * 215.0) as u8;
+        Rgb([g, g, g])
+    });
+    save_png(&img, path)
+}
+
+/// Writes the raw shadow term as a float32 RGBA OpenEXR: R, G, B = transmittance towards
+/// the light (1 = lit), A = coverage (1 where a surface covers the pixel centre).
+pub fn write_visibility_exr(path: &Path, view: &ViewSamples, vis: &Visibility) -> Result<()> {
+    let (w, h) = (view.width, view.height);
+    let img: ImageBuffer<Rgba<f32>, Vec<f32>> = ImageBuffer::from_fn(w, h, |x, y| {
+        let k = (y * w + x) as usize;
+        let v = vis.value[k];
+        Rgba([v.x, v.y, v.z, if view.covered(k) { 1.0 } else { 0.0 }])
+    });
+    img.save(path).map_err(|e| Error::Output {
+        path: path.into(),
+        what: e.to_string(),
+    })
+}
+
+/// Reads a visibility EXR written by [`write_visibility_exr`]: the shadow term and the
+/// coverage mask.
+pub fn read_visibility_exr(path: &Path) -> Result<(Visibility, Vec<bool>)> {
+    let img = image::open(path)
+        .map_err(|e| Error::format(path, format!("not a readable EXR image ({e})")))?
+        .into_rgba32f();
+    let (w, h) = img.dimensions();
+    let mut value = Vec::with_capacity((w * h) as usize);
+    let mut covered = Vec::with_capacity((w * h) as usize);
+    for p in img.pixels() {
+        value.push(vec3(p[0], p[1], p[2]));
+        covered.push(p[3] > 0.5);
+    }
+    Ok((
+        Visibility {
+            width: w,
+            height: h,
+            value,
+        },
+        covered,
+    ))
+}

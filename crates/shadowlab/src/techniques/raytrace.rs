@@ -1,0 +1,49 @@
+//! `raytrace`: the ray-traced reference as a technique, so its cost sits in the same
+//! tables as the others. See [`crate::reference`] for how rays are traced.
+
+use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
+use crate::error::Result;
+use crate::reference::Reference;
+use crate::sampling::{pattern, PatternKind};
+use std::collections::BTreeMap;
+
+/// Shadow rays from every visible sample (or from `spp` re-traced primary rays per pixel).
+#[derive(Clone, Debug)]
+pub struct RayTrace {
+    /// Primary rays per pixel; 1 traces from the camera pass's samples.
+    pub spp: u32,
+}
+
+impl Default for RayTrace {
+    fn default() -> Self {
+        RayTrace { spp: 1 }
+    }
+}
+
+impl ShadowTechnique for RayTrace {
+    fn name(&self) -> &'static str {
+        "raytrace"
+    }
+
+    fn params(&self) -> BTreeMap<String, serde_json::Value> {
+        BTreeMap::from([("spp".to_string(), self.spp.into())])
+    }
+
+    fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
+        match key {
+            "spp" => self.spp = check_range("raytrace", key, parse_value("raytrace", key, value)?, 1, 1024)?,
+            _ => return Err(unknown_param("raytrace", key, &["spp"])),
+        }
+        Ok(())
+    }
+
+    fn render(&mut self, frame: &Frame) -> Result<Shadows> {
+        let mut stats = Stats::default();
+        let reference = stats.stage("bvh_build", || Reference::build(frame.scene));
+        let samples = pattern(PatternKind::Grid, self.spp)?;
+        let visibility = stats.stage("trace", || reference.visibility(frame, &samples));
+        stats.memory_bytes = reference.memory_bytes() as u64;
+        stats.count("rays", frame.view.covered_count() as f64 * self.spp as f64);
+        Ok(Shadows { visibility, stats })
+    }
+}
