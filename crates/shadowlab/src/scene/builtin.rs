@@ -6,3 +6,7 @@ use std::collections::BTreeMap;
 pub fn generate(name: &str, _params: &BTreeMap<String, String>) -> Result<Scene> {
     Err(Error::param(format!("unknown scene {name}")))
 }
+/// Lists scenes.
+pub fn list() -> Vec<(&'static str, &'static str)> {
+    Vec::new()
+}

@@ -5,6 +5,7 @@
 //! papers' test scenes live in the submodules; [`load`] picks one from a scene spec.
 
 pub mod builtin;
+pub mod export;
 pub mod gltf;
 pub mod obj;
 pub mod ply;

@@ -1,0 +1,470 @@
+//! `render`, `compare` and `scenes`.
+
+use crate::config::{parse_kvs, parse_prefixed_params, SceneArgs, Setup};
+use crate::{progress, report};
+use anyhow::{bail, Context, Result};
+use serde_json::{json, Value};
+use shadowlab::camera::Camera;
+use shadowlab::compare::{compare as measure, Metrics};
+use shadowlab::light::Light;
+use shadowlab::reference::Reference;
+use shadowlab::sampling::{pattern, PatternKind};
+use shadowlab::shade;
+use shadowlab::techniques::{self, Frame, ShadowTechnique, Shadows};
+use shadowlab::view::ViewSamples;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// An input error found by the command line itself (exit code 2).
+#[derive(Debug)]
+pub struct BadInput(pub String);
+impl std::fmt::Display for BadInput {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+impl std::error::Error for BadInput {}
+
+/// `shadowlab render`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// The technique: sm, pcf, psm, asm, afsm, subpixel, csm, vsm or raytrace.
+    #[arg(long, default_value = "afsm")]
+    pub technique: String,
+    /// A technique parameter, e.g. `resolution=2048`.
+    #[arg(long = "param", value_name = "K=V")]
+    pub params: Vec<String>,
+    /// The shaded image (PNG).
+    #[arg(long, default_value = "shadowlab.png")]
+    pub output: PathBuf,
+    /// The raw shadow term as float32 EXR (R, G, B = transmittance, A = coverage).
+    #[arg(long)]
+    pub visibility: Option<PathBuf>,
+    /// Timings, counters, the resolved camera and light, and every parameter, as JSON.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// The world-space triangles the renderer used, as OBJ (one `o` group per material).
+    #[arg(long = "export-scene")]
+    pub export_scene: Option<PathBuf>,
+    /// Write the technique's intermediate images into this folder.
+    #[arg(long)]
+    pub dump: Option<PathBuf>,
+    /// Overwrite existing output files.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `shadowlab compare`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Comma-separated technique names, or `all`.
+    #[arg(long, default_value = "all")]
+    pub techniques: String,
+    /// A technique parameter prefixed with its technique: `sm.resolution=4096`.
+    #[arg(long = "param", value_name = "T.K=V")]
+    pub params: Vec<String>,
+    /// One result per value of a technique parameter: `sm.resolution=512,1024,2048`.
+    #[arg(long = "sweep", value_name = "T.K=V1,V2,...")]
+    pub sweeps: Vec<String>,
+    /// Primary rays per pixel of the reference (at sub-pixel positions when > 1).
+    #[arg(long = "reference-spp", default_value_t = 1)]
+    pub reference_spp: u32,
+    /// Sub-pixel pattern of the supersampled reference: grid or rotated-grid.
+    #[arg(long = "reference-pattern", default_value = "grid")]
+    pub reference_pattern: String,
+    /// The report folder.
+    #[arg(long, default_value = "shadowlab-report")]
+    pub out: PathBuf,
+    /// Write each technique's intermediate images into DIR/dump.
+    #[arg(long)]
+    pub dump: bool,
+    /// Allow writing into a non-empty folder that is not an earlier report.
+    #[arg(long)]
+    pub force: bool,
+}
+
+impl CompareArgs {
+    /// What `shadowlab` with no arguments runs: compare on the default scene.
+    pub fn default_run() -> Self {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Wrap {
+            #[command(flatten)]
+            c: CompareArgs,
+        }
+        Wrap::parse_from(["shadowlab"]).c
+    }
+}
+
+/// The resolved camera and light in world units, as CLI.md's provenance section says.
+pub fn provenance(camera: &Camera, light: &Light) -> (Value, Value) {
+    let v = |p: shadowlab::math::Vec3| json!([p.x, p.y, p.z]);
+    let cam = json!({
+        "eye": v(camera.eye), "target": v(camera.target), "up": v(camera.up),
+        "fov_y_deg": camera.fov_y_deg, "near": camera.near, "far": camera.far,
+        "width": camera.width, "height": camera.height,
+    });
+    let l = match *light {
+        Light::Directional { to_light } => json!({"kind": "directional", "to_light": v(to_light)}),
+        Light::Point { position } => json!({"kind": "point", "position": v(position)}),
+        Light::Spot { position, target, fov_deg } => {
+            json!({"kind": "spot", "position": v(position), "target": v(target), "fov_deg": fov_deg})
+        }
+    };
+    (cam, l)
+}
+
+fn stats_json(s: &Shadows, time_ms: f64) -> serde_json::Map<String, Value> {
+    let mut m = serde_json::Map::new();
+    m.insert("time_ms".into(), json!(time_ms));
+    let stages: serde_json::Map<String, Value> = s.stats.stages_ms.iter().map(|(k, v)| (k.clone(), json!(v))).collect();
+    m.insert("stages_ms".into(), Value::Object(stages));
+    m.insert("memory_bytes".into(), json!(s.stats.memory_bytes));
+    m.insert("counters".into(), json!(s.stats.counters));
+    m
+}
+
+/// Refuses to overwrite a file the user did not ask to overwrite.
+fn check_new_file(path: &Path, force: bool, flag: &str) -> Result<()> {
+    if path.exists() && !force {
+        return Err(BadInput(format!(
+            "{flag} {} already exists; pass --force to overwrite it",
+            path.display()
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+/// Makes a technique with `params` applied.
+pub fn make_technique(name: &str, params: &[(String, String)]) -> Result<Box<dyn ShadowTechnique>> {
+    let mut t = techniques::create(name)?;
+    for (k, v) in params {
+        t.set_param(k, v)?;
+    }
+    Ok(t)
+}
+
+/// One technique run over every frame of a sequence: the last frame's result and the
+/// per-frame figures.
+pub struct Run {
+    pub technique: Box<dyn ShadowTechnique>,
+    pub label: String,
+    pub last: Option<(Shadows, f64)>,
+    pub frames: Vec<Value>,
+}
+
+/// Renders frame `i`: the camera pass, shared by all techniques.
+pub fn camera_pass(setup: &Setup, i: usize) -> Result<(Camera, ViewSamples)> {
+    let camera = setup.camera_at(i);
+    camera.validate()?;
+    let view = ViewSamples::render(&setup.scene, &camera);
+    Ok((camera, view))
+}
+
+fn run_frame(run: &mut Run, frame: &Frame) -> Result<()> {
+    let t0 = Instant::now();
+    let s = run
+        .technique
+        .render(frame)
+        .with_context(|| format!("technique {}", run.label))?;
+    let ms = t0.elapsed().as_secs_f64() * 1e3;
+    run.frames.push(json!({"frame": frame.index, "time_ms": ms, "memory_bytes": s.stats.memory_bytes}));
+    run.last = Some((s, ms));
+    Ok(())
+}
+
+/// `shadowlab render`.
+pub fn render(a: &RenderArgs) -> Result<()> {
+    for (p, flag) in [(Some(&a.output), "--output"), (a.visibility.as_ref(), "--visibility"), (a.stats.as_ref(), "--stats"), (a.export_scene.as_ref(), "--export-scene")] {
+        if let Some(p) = p {
+            check_new_file(p, a.force, flag)?;
+        }
+    }
+    let params = parse_kvs(&a.params, "--param")?;
+    let params: Vec<(String, String)> = params.into_iter().collect();
+    let technique = make_technique(&a.technique, &params)?;
+    let pb = progress::step(format!("loading {}", a.scene.scene));
+    let setup = a.scene.resolve()?;
+    pb.finish_and_clear();
+    let mut run = Run {
+        label: a.technique.clone(),
+        technique,
+        last: None,
+        frames: Vec::new(),
+    };
+    if let Some(d) = &a.dump {
+        std::fs::create_dir_all(d).with_context(|| format!("cannot create --dump folder {}", d.display()))?;
+    }
+    let bar = progress::bar(setup.frames as u64, format!("rendering {}", a.technique));
+    let mut last = None;
+    let mut camera_pass_ms = 0.0;
+    for i in 0..setup.frames {
+        let (camera, view) = camera_pass(&setup, i)?;
+        camera_pass_ms = view.time_ms;
+        let mut frame = Frame::new(&setup.scene, &camera, &setup.light, &view);
+        frame.index = i;
+        frame.dump_dir = a.dump.as_deref();
+        run_frame(&mut run, &frame)?;
+        if a.scene.frames > 1 {
+            let img = shade::shade(&setup.scene, &view, &setup.light, &run.last.as_ref().unwrap().0.visibility);
+            let stem = a.output.with_extension("");
+            shade::save_png(&img, Path::new(&format!("{}-{i:04}.png", stem.display())))?;
+        }
+        bar.inc(1);
+        last = Some((camera, view));
+    }
+    bar.finish_and_clear();
+    let (camera, view) = last.expect("at least one frame");
+    let (shadows, time_ms) = run.last.take().expect("rendered");
+    let img = shade::shade(&setup.scene, &view, &setup.light, &shadows.visibility);
+    shade::save_png(&img, &a.output)?;
+    if let Some(p) = &a.visibility {
+        shade::write_visibility_exr(p, &view, &shadows.visibility)?;
+    }
+    if let Some(p) = &a.export_scene {
+        shadowlab::scene::export::write_obj(&setup.scene, p)?;
+    }
+    let (cam_json, light_json) = provenance(&camera, &setup.light);
+    let mut st = stats_json(&shadows, time_ms);
+    st.insert("technique".into(), json!(run.label));
+    st.insert("params".into(), json!(run.technique.params()));
+    st.insert("scene".into(), json!(setup.scene.name));
+    st.insert("scene_source".into(), json!(a.scene.scene));
+    st.insert("scene_params".into(), json!(parse_kvs(&a.scene.scene_params, "--scene-param")?));
+    st.insert("triangles".into(), json!(setup.scene.len()));
+    st.insert("shadowlab_version".into(), json!(env!("CARGO_PKG_VERSION")));
+    st.insert("camera".into(), cam_json);
+    st.insert("light".into(), light_json);
+    st.insert("camera_pass_ms".into(), json!(camera_pass_ms));
+    st.insert("covered_pixels".into(), json!(view.covered_count()));
+    if a.scene.frames > 1 {
+        st.insert("frames".into(), json!(run.frames));
+    }
+    if let Some(p) = &a.stats {
+        write_json(p, &Value::Object(st))?;
+    }
+    if !progress::quiet() {
+        eprintln!("{}: {} in {:.1} ms, wrote {}", setup.scene.name, run.label, time_ms, a.output.display());
+    }
+    Ok(())
+}
+
+/// Writes pretty JSON.
+pub fn write_json(path: &Path, v: &Value) -> Result<()> {
+    let text = serde_json::to_string_pretty(v).expect("JSON values serialize");
+    std::fs::write(path, text + "\n").with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Expands `--techniques` and `--sweep` into labelled runs with their parameters.
+fn plan_runs(a: &CompareArgs) -> Result<Vec<(String, String, Vec<(String, String)>)>> {
+    let names: Vec<String> = if a.techniques.trim() == "all" {
+        techniques::ALL.iter().map(|s| s.to_string()).collect()
+    } else {
+        a.techniques.split(',').map(|s| s.trim().to_string()).filter(|s| !s.is_empty()).collect()
+    };
+    if names.is_empty() {
+        bail!("--techniques {:?} names no technique", a.techniques);
+    }
+    let params = parse_prefixed_params(&a.params)?;
+    for t in params.keys() {
+        if !names.contains(t) {
+            bail!("--param names technique {t}, which is not among --techniques {}", names.join(","));
+        }
+    }
+    let mut sweeps: Vec<(String, String, Vec<String>)> = Vec::new();
+    for s in &a.sweeps {
+        let Some((tk, vals)) = s.split_once('=') else {
+            bail!("--sweep {s:?} is not TECHNIQUE.KEY=V1,V2,...");
+        };
+        let Some((t, k)) = tk.split_once('.') else {
+            bail!("--sweep {s:?} must name its technique: TECHNIQUE.KEY=V1,V2,...");
+        };
+        let vals: Vec<String> = vals.split(',').map(|v| v.trim().to_string()).filter(|v| !v.is_empty()).collect();
+        if vals.is_empty() {
+            bail!("--sweep {s:?} lists no values");
+        }
+        sweeps.push((t.trim().to_string(), k.trim().to_string(), vals));
+    }
+    let mut runs = Vec::new();
+    for n in &names {
+        let base = params.get(n).cloned().unwrap_or_default();
+        let mine: Vec<_> = sweeps.iter().filter(|s| &s.0 == n).collect();
+        if mine.is_empty() {
+            runs.push((n.clone(), n.clone(), base));
+            continue;
+        }
+        for (_, k, vals) in mine {
+            for v in vals {
+                let mut p = base.clone();
+                p.push((k.clone(), v.clone()));
+                runs.push((n.clone(), format!("{n}.{k}={v}"), p));
+            }
+        }
+    }
+    for (t, _, _) in &sweeps {
+        if !names.contains(t) {
+            bail!("--sweep names technique {t}, which is not among --techniques {}", names.join(","));
+        }
+    }
+    Ok(runs)
+}
+
+/// Checks the report folder: it may be new, empty, or an earlier report; anything else
+/// needs `--force`.
+fn prepare_out(dir: &Path, force: bool) -> Result<()> {
+    if dir.exists() {
+        if !dir.is_dir() {
+            return Err(BadInput(format!("--out {} exists and is not a folder", dir.display())).into());
+        }
+        let non_empty = std::fs::read_dir(dir)?.next().is_some();
+        let is_report = dir.join("metrics.json").is_file();
+        if non_empty && !is_report && !force {
+            return Err(BadInput(format!(
+                "--out {} is a non-empty folder that is not a shadowlab report; pass --force to write into it",
+                dir.display()
+            ))
+            .into());
+        }
+    }
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    Ok(())
+}
+
+/// File-name-safe form of a run label.
+pub fn slug(s: &str) -> String {
+    s.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
+}
+
+/// `shadowlab compare` (and `shadowlab` with no arguments).
+pub fn compare(a: &CompareArgs) -> Result<()> {
+    let plan = plan_runs(a)?;
+    let kind: PatternKind = a.reference_pattern.parse()?;
+    let samples = pattern(kind, a.reference_spp)?;
+    let mut runs = Vec::new();
+    for (name, label, params) in &plan {
+        runs.push(Run {
+            technique: make_technique(name, params)?,
+            label: label.clone(),
+            last: None,
+            frames: Vec::new(),
+        });
+    }
+    prepare_out(&a.out, a.force)?;
+    let pb = progress::step(format!("loading {}", a.scene.scene));
+    let setup = a.scene.resolve()?;
+    pb.finish_and_clear();
+    let dump = a.dump.then(|| a.out.join("dump"));
+    if let Some(d) = &dump {
+        std::fs::create_dir_all(d)?;
+    }
+    let bar = progress::bar((setup.frames * runs.len()) as u64, "techniques");
+    let mut last = None;
+    for i in 0..setup.frames {
+        let (camera, view) = camera_pass(&setup, i)?;
+        let mut frame = Frame::new(&setup.scene, &camera, &setup.light, &view);
+        frame.index = i;
+        frame.dump_dir = dump.as_deref();
+        for run in runs.iter_mut() {
+            bar.set_message(format!("frame {}/{} {}", i + 1, setup.frames, run.label));
+            run_frame(run, &frame)?;
+            bar.inc(1);
+        }
+        last = Some((camera, view));
+    }
+    bar.finish_and_clear();
+    let (camera, view) = last.expect("at least one frame");
+    let frame = Frame::new(&setup.scene, &camera, &setup.light, &view);
+    let pb = progress::step(format!("ray-traced reference ({} spp)", a.reference_spp));
+    let t0 = Instant::now();
+    let reference = Reference::build(&setup.scene);
+    let bvh_ms = reference.build_ms;
+    let ref_vis = reference.visibility(&frame, &samples);
+    let ref_ms = t0.elapsed().as_secs_f64() * 1e3;
+    pb.finish_and_clear();
+
+    let mut results = Vec::new();
+    let mut rows = Vec::new();
+    let ref_img = shade::shade(&setup.scene, &view, &setup.light, &ref_vis);
+    shade::save_png(&ref_img, &a.out.join("reference.png"))?;
+    for run in &runs {
+        let (s, ms) = run.last.as_ref().expect("every run rendered");
+        let m: Metrics = measure(&view, &s.visibility, &ref_vis);
+        let file = slug(&run.label);
+        shade::save_png(&shade::shade(&setup.scene, &view, &setup.light, &s.visibility), &a.out.join(format!("{file}.png")))?;
+        shade::save_png(&shade::error_image(&view, &s.visibility, &ref_vis), &a.out.join(format!("{file}-error.png")))?;
+        let mut r = serde_json::Map::new();
+        r.insert("technique".into(), json!(run.technique.name()));
+        r.insert("label".into(), json!(run.label));
+        r.insert("params".into(), json!(run.technique.params()));
+        r.extend(stats_json(s, *ms));
+        r.insert("mismatch_rate".into(), json!(m.mismatch_rate));
+        r.insert("mean_abs_error".into(), json!(m.mean_abs_error));
+        r.insert("mean_abs_error_rgb".into(), json!(m.mean_abs_error_rgb));
+        r.insert("image".into(), json!(format!("{file}.png")));
+        r.insert("error_image".into(), json!(format!("{file}-error.png")));
+        if setup.frames > 1 {
+            r.insert("frames".into(), json!(run.frames));
+        }
+        rows.push((run.label.clone(), *ms, m));
+        results.push(Value::Object(r));
+    }
+    let (cam_json, light_json) = provenance(&camera, &setup.light);
+    let metrics = json!({
+        "scene": setup.scene.name,
+        "scene_source": a.scene.scene,
+        "scene_params": parse_kvs(&a.scene.scene_params, "--scene-param")?,
+        "triangles": setup.scene.len(),
+        "width": view.width, "height": view.height,
+        "covered_pixels": view.covered_count(),
+        "camera_pass_ms": view.time_ms,
+        "frames": setup.frames,
+        "threads": rayon::current_num_threads(),
+        "shadowlab_version": env!("CARGO_PKG_VERSION"),
+        "camera": cam_json, "light": light_json,
+        "reference": {
+            "technique": "raytrace", "samples_per_pixel": a.reference_spp,
+            "pattern": a.reference_pattern,
+            "time_ms": ref_ms, "bvh_build_ms": bvh_ms, "trace_ms": ref_ms - bvh_ms,
+            "image": "reference.png",
+        },
+        "results": results,
+    });
+    write_json(&a.out.join("metrics.json"), &metrics)?;
+    report::write_html(&a.out, &metrics)?;
+    if !progress::quiet() {
+        println!(
+            "{} — {} triangles, {}x{}, {} covered pixels; camera pass {:.1} ms; reference {:.1} ms (BVH {:.1} + trace {:.1})",
+            setup.scene.name,
+            setup.scene.len(),
+            view.width,
+            view.height,
+            view.covered_count(),
+            view.time_ms,
+            ref_ms,
+            bvh_ms,
+            ref_ms - bvh_ms
+        );
+        println!("{:<28} {:>10} {:>10} {:>10}", "technique", "time ms", "mismatch", "mean err");
+        for (label, ms, m) in &rows {
+            println!("{:<28} {:>10.2} {:>9.4}% {:>10.5}", label, ms, m.mismatch_rate * 100.0, m.mean_abs_error);
+        }
+        println!("report: {}", a.out.join("index.html").display());
+    }
+    Ok(())
+}
+
+/// `shadowlab scenes`.
+pub fn scenes() -> Result<()> {
+    for (name, desc) in shadowlab::scene::builtin::list() {
+        let n = shadowlab::scene::builtin::generate(name, &Default::default())
+            .map(|s| s.len().to_string())
+            .unwrap_or_else(|e| format!("({e})"));
+        println!("{name:<18} {n:>10}  {desc}");
+    }
+    Ok(())
+}

@@ -1,0 +1,180 @@
+//! Raw command-line arguments turned into a validated configuration before any work
+//! starts: the scene is loaded, overrides applied, the camera and light resolved.
+
+use anyhow::{bail, Context, Result};
+use shadowlab::camera::Camera;
+use shadowlab::light::Light;
+use shadowlab::math::{vec3, Vec3};
+use shadowlab::scene::{self, Scene};
+use std::collections::BTreeMap;
+
+/// The scene-related flags every command shares.
+#[derive(clap::Args, Debug, Clone)]
+pub struct SceneArgs {
+    /// A built-in scene name (see `shadowlab scenes`), a `.toml` scene file, or a mesh
+    /// (`.obj`, `.ply`, `.gltf`, `.glb`).
+    #[arg(long, default_value = "bunny")]
+    pub scene: String,
+    /// A built-in scene's parameter, e.g. `count=1000000` for random-triangles.
+    #[arg(long = "scene-param", value_name = "K=V")]
+    pub scene_params: Vec<String>,
+    /// Image width in pixels.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Camera override: `EX,EY,EZ:TX,TY,TZ[:FOV_DEG]`.
+    #[arg(long, value_name = "EYE:TARGET[:FOV]")]
+    pub camera: Option<String>,
+    /// Move the camera along its view ray to F times its distance from its target.
+    #[arg(long = "camera-distance", value_name = "F")]
+    pub camera_distance: Option<f32>,
+    /// Light override: `directional:DX,DY,DZ`, `point:X,Y,Z` or `spot:X,Y,Z:TX,TY,TZ:FOV_DEG`.
+    #[arg(long)]
+    pub light: Option<String>,
+    /// Render the camera path (or a still camera) this many times; reports describe the last.
+    #[arg(long, default_value_t = 1)]
+    pub frames: usize,
+}
+
+/// A loaded scene with its resolved camera (first frame), light and path.
+pub struct Setup {
+    pub scene: Scene,
+    pub camera: Camera,
+    pub light: Light,
+    pub frames: usize,
+}
+
+/// The most frames a sequence may have.
+pub const MAX_FRAMES: usize = 100_000;
+
+impl Setup {
+    /// The camera of frame `i` (the scene's path when it has one, else the still camera),
+    /// with its depth range fitted to the scene.
+    pub fn camera_at(&self, i: usize) -> Camera {
+        let mut c = match &self.scene.camera_path {
+            Some(path) if self.frames > 1 => path.camera_at(&self.camera, i, self.frames),
+            _ => self.camera,
+        };
+        c.fit_depth_range(&self.scene.bounds);
+        c
+    }
+}
+
+fn parse_kv(s: &str, flag: &str) -> Result<(String, String)> {
+    match s.split_once('=') {
+        Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
+        _ => bail!("{flag} {s:?} is not of the form KEY=VALUE"),
+    }
+}
+
+/// Parses repeated `K=V` flags.
+pub fn parse_kvs(items: &[String], flag: &str) -> Result<BTreeMap<String, String>> {
+    items.iter().map(|s| parse_kv(s, flag)).collect()
+}
+
+/// Parses `X,Y,Z`.
+pub fn parse_vec3(s: &str, what: &str) -> Result<Vec3> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("{what} {s:?} is not three comma-separated numbers"))?;
+    if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
+        bail!("{what} {s:?} is not three finite comma-separated numbers");
+    }
+    Ok(vec3(v[0], v[1], v[2]))
+}
+
+/// Parses a `--light` value.
+pub fn parse_light(s: &str) -> Result<Light> {
+    let parts: Vec<&str> = s.split(':').collect();
+    let light = match parts.as_slice() {
+        ["directional", d] => Light::Directional {
+            to_light: parse_vec3(d, "--light direction")?,
+        },
+        ["point", p] => Light::Point {
+            position: parse_vec3(p, "--light position")?,
+        },
+        ["spot", p, t, f] => Light::Spot {
+            position: parse_vec3(p, "--light position")?,
+            target: parse_vec3(t, "--light target")?,
+            fov_deg: f.trim().parse().with_context(|| format!("--light cone angle {f:?} is not a number"))?,
+        },
+        _ => bail!("--light {s:?} is not directional:DX,DY,DZ, point:X,Y,Z or spot:X,Y,Z:TX,TY,TZ:FOV_DEG"),
+    };
+    light.validate().context("--light")?;
+    Ok(light.normalized())
+}
+
+impl SceneArgs {
+    /// Loads the scene and applies every override.
+    pub fn resolve(&self) -> Result<Setup> {
+        if self.frames == 0 || self.frames > MAX_FRAMES {
+            bail!("--frames {} is outside 1..={MAX_FRAMES}", self.frames);
+        }
+        let params = parse_kvs(&self.scene_params, "--scene-param")?;
+        let scene = scene::load(&self.scene, &params)?;
+        let mut camera = scene.camera.unwrap_or_else(|| {
+            let mut s = scene.clone();
+            s.auto_frame(false);
+            s.camera.expect("auto_frame sets a camera")
+        });
+        if let Some(w) = self.width {
+            camera.width = w;
+        }
+        if let Some(h) = self.height {
+            camera.height = h;
+        }
+        if let Some(c) = &self.camera {
+            let parts: Vec<&str> = c.split(':').collect();
+            if parts.len() < 2 || parts.len() > 3 {
+                bail!("--camera {c:?} is not EX,EY,EZ:TX,TY,TZ[:FOV_DEG]");
+            }
+            camera.eye = parse_vec3(parts[0], "--camera eye")?;
+            camera.target = parse_vec3(parts[1], "--camera target")?;
+            if let Some(f) = parts.get(2) {
+                camera.fov_y_deg = f.trim().parse().with_context(|| format!("--camera field of view {f:?} is not a number"))?;
+            }
+            if (camera.target - camera.eye).normalize_or_zero().cross(camera.up).length_squared() < 1e-8 {
+                camera.up = if camera.up == Vec3::Y { Vec3::Z } else { Vec3::Y };
+            }
+        }
+        if let Some(f) = self.camera_distance {
+            if !(f.is_finite() && f > 0.0) {
+                bail!("--camera-distance {f} must be a positive number");
+            }
+            camera.scale_distance(f);
+        }
+        let light = match &self.light {
+            Some(l) => parse_light(l)?,
+            None => scene.light.unwrap_or(Light::Directional {
+                to_light: vec3(-0.4, 1.0, 0.3).normalize(),
+            }),
+        };
+        light.validate()?;
+        let mut check = camera;
+        check.fit_depth_range(&scene.bounds);
+        check.validate()?;
+        Ok(Setup {
+            scene,
+            camera,
+            light: light.normalized(),
+            frames: self.frames,
+        })
+    }
+}
+
+/// `T.K=V` technique parameters of `compare`, grouped by technique.
+pub fn parse_prefixed_params(items: &[String]) -> Result<BTreeMap<String, Vec<(String, String)>>> {
+    let mut out: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
+    for s in items {
+        let (k, v) = parse_kv(s, "--param")?;
+        let Some((t, key)) = k.split_once('.') else {
+            bail!("--param {s:?} in compare must name its technique: TECHNIQUE.KEY=VALUE, e.g. sm.resolution=4096");
+        };
+        out.entry(t.to_string()).or_default().push((key.to_string(), v));
+    }
+    Ok(out)
+}
