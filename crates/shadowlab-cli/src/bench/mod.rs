@@ -2,6 +2,12 @@
 //! prints a table with the paper's figures beside ours and, with `--json`, writes
 //! `{"suite", "machine", "rows"}`. Times are medians of several runs in milliseconds.
 
+mod afsm_scaling;
+mod asm_walkthrough;
+mod csm_table;
+mod psm_lights;
+mod subpixel_scaling;
+
 use anyhow::{bail, Result};
 use serde_json::{json, Value};
 use std::path::PathBuf;
@@ -29,7 +35,7 @@ pub struct BenchReport {
 }
 
 /// Every suite name.
-pub const SUITES: &[&str] = &[];
+pub const SUITES: &[&str] = &["afsm-scaling", "subpixel-scaling", "csm-table", "asm-walkthrough", "psm-lights"];
 
 /// The median of `n` timed runs of `f`, in milliseconds, and the last result.
 pub fn median_ms<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
@@ -62,9 +68,13 @@ pub fn machine() -> Value {
 /// Runs a suite.
 pub fn run(a: &BenchArgs) -> Result<()> {
     let report: BenchReport = match a.suite.as_str() {
+        "afsm-scaling" => afsm_scaling::run(a)?,
+        "subpixel-scaling" => subpixel_scaling::run(a)?,
+        "csm-table" => csm_table::run(a)?,
+        "asm-walkthrough" => asm_walkthrough::run(a)?,
+        "psm-lights" => psm_lights::run(a)?,
         _ => bail!("unknown bench suite {:?}: known suites are {}", a.suite, SUITES.join(", ")),
     };
-    #[allow(unreachable_code)]
     if let Some(p) = &a.json {
         crate::commands::write_json(p, &json!({"suite": a.suite, "machine": machine(), "rows": report.rows}))?;
     }

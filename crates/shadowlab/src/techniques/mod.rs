@@ -8,8 +8,15 @@
 //! the light, or lies outside a spot light's cone, is unlit (0) in every technique and in
 //! the reference alike.
 
+pub mod adaptive;
+pub mod alias_free;
+pub mod convolution;
+pub mod filtering;
+pub mod perspective;
 pub mod raytrace;
 pub mod shadow_map;
+pub mod subpixel;
+pub mod variance;
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
@@ -129,7 +136,7 @@ pub trait ShadowTechnique: Send {
 }
 
 /// Every technique name, in the order reports list them.
-pub const ALL: &[&str] = &["raytrace", "sm", "pcf"];
+pub const ALL: &[&str] = &["raytrace", "sm", "pcf", "psm", "asm", "afsm", "subpixel", "csm", "vsm"];
 
 /// A technique by name, with default parameters.
 pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
@@ -137,6 +144,12 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
         "raytrace" => Box::new(raytrace::RayTrace::default()),
         "sm" => Box::new(shadow_map::ShadowMap::standard()),
         "pcf" => Box::new(shadow_map::ShadowMap::pcf()),
+        "psm" => Box::new(perspective::Perspective::default()),
+        "asm" => Box::new(adaptive::Adaptive::default()),
+        "afsm" => Box::new(alias_free::AliasFree::default()),
+        "subpixel" => Box::new(subpixel::Subpixel::default()),
+        "csm" => Box::new(convolution::Convolution::default()),
+        "vsm" => Box::new(variance::Variance::default()),
         _ => {
             return Err(Error::param(format!(
                 "unknown technique {name:?}: known techniques are {}",

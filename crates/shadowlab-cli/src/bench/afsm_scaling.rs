@@ -1,0 +1,9 @@
+//! `afsm-scaling` (being written).
+
+use super::{BenchArgs, BenchReport};
+use anyhow::{bail, Result};
+
+/// Runs the suite.
+pub fn run(_a: &BenchArgs) -> Result<BenchReport> {
+    bail!("bench suite afsm-scaling is not available yet")
+}

@@ -1,0 +1,9 @@
+//! `asm-walkthrough` (being written).
+
+use super::{BenchArgs, BenchReport};
+use anyhow::{bail, Result};
+
+/// Runs the suite.
+pub fn run(_a: &BenchArgs) -> Result<BenchReport> {
+    bail!("bench suite asm-walkthrough is not available yet")
+}

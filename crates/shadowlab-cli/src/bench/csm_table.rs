@@ -1,0 +1,9 @@
+//! `csm-table` (being written).
+
+use super::{BenchArgs, BenchReport};
+use anyhow::{bail, Result};
+
+/// Runs the suite.
+pub fn run(_a: &BenchArgs) -> Result<BenchReport> {
+    bail!("bench suite csm-table is not available yet")
+}
