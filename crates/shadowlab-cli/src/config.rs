@@ -28,7 +28,7 @@ pub struct SceneArgs {
     #[arg(long, value_name = "EYE:TARGET[:FOV]")]
     pub camera: Option<String>,
     /// Move the camera along its view ray to F times its distance from its target.
-    #[arg(long = "camera-distance", value_name = "F")]
+    #[arg(long = "camera-distance", value_name = "F", allow_negative_numbers = true)]
     pub camera_distance: Option<f32>,
     /// Light override: `directional:DX,DY,DZ`, `point:X,Y,Z` or `spot:X,Y,Z:TX,TY,TZ:FOV_DEG`.
     #[arg(long)]

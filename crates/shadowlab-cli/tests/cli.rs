@@ -1,0 +1,194 @@
+//! The command line as scripts use it: exit codes, one-sentence errors, outputs.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_shadowlab"));
+    c.arg("--quiet");
+    c
+}
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data")).join(name)
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("shadowlab-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Bad input: exit code 2, one line on stderr that starts with `error:` and mentions
+/// `needle`, and no panic.
+fn assert_bad_input(out: &Output, needle: &str) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "expected exit 2, got {:?}; stderr: {err}", out.status.code());
+    assert!(!err.contains("panicked"), "panic: {err}");
+    assert_eq!(err.trim().lines().count(), 1, "expected one sentence, got: {err}");
+    assert!(err.starts_with("error:"), "{err}");
+    assert!(err.to_lowercase().contains(&needle.to_lowercase()), "{err:?} does not mention {needle:?}");
+}
+
+fn render(dir: &Path, args: &[&str]) -> Output {
+    bin()
+        .arg("render")
+        .args(args)
+        .arg("--output")
+        .arg(dir.join("out.png"))
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn bad_flags_and_parameters_exit_with_2_and_one_sentence() {
+    let d = tmp("flags");
+    let bunny = data("bunny.obj");
+    let b = bunny.to_str().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--scene", b, "--technique", "nope"], "unknown technique"),
+        (&["--scene", b, "--technique", "sm", "--param", "colour=3"], "resolution"),
+        (&["--scene", b, "--technique", "sm", "--param", "resolution=0"], "resolution"),
+        (&["--scene", b, "--technique", "sm", "--param", "resolution=1000000"], "resolution"),
+        (&["--scene", b, "--technique", "sm", "--param", "resolution=abc"], "resolution"),
+        (&["--scene", b, "--technique", "sm", "--width", "0"], "width"),
+        (&["--scene", b, "--technique", "sm", "--width", "100000"], "limit"),
+        (&["--scene", b, "--technique", "sm", "--light", "sideways:1,2,3"], "--light"),
+        (&["--scene", b, "--technique", "sm", "--light", "directional:0,0,0"], "direction"),
+        (&["--scene", b, "--technique", "sm", "--camera", "1,2:3"], "--camera"),
+        (&["--scene", b, "--technique", "sm", "--camera-distance", "-1"], "--camera-distance"),
+        (&["--scene", b, "--technique", "sm", "--frames", "0"], "--frames"),
+        (&["--scene", "/nonexistent/mesh.obj", "--technique", "sm"], "mesh.obj"),
+        (&["--scene", "no-such-scene", "--technique", "sm"], "no-such-scene"),
+    ];
+    for (args, needle) in cases {
+        let out = render(&d, args);
+        assert_bad_input(&out, needle);
+    }
+}
+
+#[test]
+fn malformed_meshes_exit_with_2_naming_the_file() {
+    let d = tmp("meshes");
+    let write = |name: &str, text: &str| {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let nan = write("nan.obj", "v 0 0 0\nv 1 0 0\nv NaN 1 0\nf 1 2 3\n");
+    let inf = write("inf.obj", "v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n");
+    let empty = write("empty.obj", "# nothing here\n");
+    let range = write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+    let ply = write("trunc.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n");
+    let toml = write("bad.toml", "[camera]\neye = [0, 0, 5]\nwobble = 3\n");
+    for p in [&nan, &inf, &empty, &range, &ply, &toml] {
+        let out = render(&d, &["--scene", p.to_str().unwrap(), "--technique", "sm"]);
+        let name = p.file_name().unwrap().to_str().unwrap();
+        assert_bad_input(&out, name);
+    }
+}
+
+#[test]
+fn files_in_the_bad_folder_never_panic() {
+    let d = tmp("bad");
+    let mut files = Vec::new();
+    let mut stack = vec![data("bad")];
+    while let Some(p) = stack.pop() {
+        for e in std::fs::read_dir(&p).unwrap() {
+            let e = e.unwrap().path();
+            if e.is_dir() {
+                stack.push(e);
+            } else if matches!(e.extension().and_then(|x| x.to_str()), Some("gltf" | "glb")) {
+                files.push(e);
+            }
+        }
+    }
+    assert!(files.len() >= 4);
+    for f in files {
+        let out = render(&d, &["--scene", f.to_str().unwrap(), "--technique", "sm", "--width", "64", "--height", "48", "--force"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("panicked"), "{}: {err}", f.display());
+        match out.status.code() {
+            Some(0) => {}
+            Some(2) => assert_bad_input(&out, f.file_name().unwrap().to_str().unwrap()),
+            c => panic!("{}: exit {c:?}: {err}", f.display()),
+        }
+    }
+}
+
+#[test]
+fn render_writes_image_visibility_and_stats_and_refuses_to_overwrite() {
+    let d = tmp("render");
+    let bunny = data("bunny.obj");
+    let (vis, stats) = (d.join("vis.exr"), d.join("stats.json"));
+    let args = [
+        "--scene",
+        bunny.to_str().unwrap(),
+        "--technique",
+        "pcf",
+        "--width",
+        "96",
+        "--height",
+        "72",
+        "--visibility",
+        vis.to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ];
+    let out = render(&d, &args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let png = image::open(d.join("out.png")).unwrap();
+    assert_eq!((png.width(), png.height()), (96, 72));
+    let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("stats.json")).unwrap()).unwrap();
+    assert_eq!(stats["technique"], "pcf");
+    assert_eq!(stats["params"]["kernel"], 3);
+    assert_eq!(stats["camera"]["width"], 96);
+    assert!(stats["light"]["kind"].is_string());
+    // A second run must not overwrite what the first wrote.
+    let again = render(&d, &args);
+    assert_bad_input(&again, "already exists");
+}
+
+#[test]
+fn compare_writes_metrics_and_refuses_foreign_folders() {
+    let d = tmp("compare");
+    let bunny = data("bunny.obj");
+    let out_dir = d.join("report");
+    let run = |extra: &[&str]| {
+        bin()
+            .args(["compare", "--scene", bunny.to_str().unwrap(), "--techniques", "sm,pcf", "--width", "96", "--height", "72"])
+            .args(["--sweep", "sm.resolution=256,1024"])
+            .arg("--out")
+            .arg(&out_dir)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let out = run(&[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let m: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out_dir.join("metrics.json")).unwrap()).unwrap();
+    assert_eq!(m["width"], 96);
+    let results = m["results"].as_array().unwrap();
+    assert_eq!(results.len(), 3, "two sweep values of sm and one pcf");
+    for r in results {
+        for key in ["technique", "params", "time_ms", "stages_ms", "memory_bytes", "mismatch_rate", "mean_abs_error", "counters"] {
+            assert!(!r[key].is_null(), "result lacks {key}: {r}");
+        }
+        assert!(out_dir.join(r["image"].as_str().unwrap()).is_file());
+    }
+    assert!(m["reference"]["time_ms"].as_f64().unwrap() > 0.0);
+    // Writing again into an earlier report is fine.
+    assert!(run(&[]).status.success());
+    // A folder that holds something else is refused unless --force.
+    let foreign = d.join("foreign");
+    std::fs::create_dir_all(&foreign).unwrap();
+    std::fs::write(foreign.join("thesis.tex"), "precious").unwrap();
+    let out = bin()
+        .args(["compare", "--scene", bunny.to_str().unwrap(), "--techniques", "sm", "--width", "32", "--height", "24", "--out"])
+        .arg(&foreign)
+        .output()
+        .unwrap();
+    assert_bad_input(&out, "--force");
+    assert_eq!(std::fs::read_to_string(foreign.join("thesis.tex")).unwrap(), "precious");
+}

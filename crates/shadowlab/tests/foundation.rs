@@ -1,0 +1,174 @@
+//! The ground every technique is measured on: the camera pass against ray casts, the
+//! standard shadow map's convergence, and thread-count independence.
+
+use shadowlab::camera::Camera;
+use shadowlab::compare::compare;
+use shadowlab::light::Light;
+use shadowlab::math::{vec2, vec3, Vec3};
+use shadowlab::reference::Reference;
+use shadowlab::scene::{self, Material, Scene};
+use shadowlab::techniques::{self, Frame};
+use shadowlab::view::ViewSamples;
+use std::path::PathBuf;
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data")).join(name)
+}
+
+fn bunny() -> (Scene, Camera, Light) {
+    let s = scene::load(data("bunny.obj").to_str().unwrap(), &Default::default()).unwrap();
+    let mut c = s.camera.unwrap();
+    c.width = 320;
+    c.height = 240;
+    c.fit_depth_range(&s.bounds);
+    let l = Light::Directional {
+        to_light: vec3(-0.6, 0.7, 0.4).normalize(),
+    };
+    (s, c, l)
+}
+
+#[test]
+fn camera_pass_depth_agrees_with_ray_cast_at_pixel_centres() {
+    let (s, c, _) = bunny();
+    let view = ViewSamples::render(&s, &c);
+    let r = Reference::build(&s);
+    let (mut disagree, mut covered) = (0, 0);
+    for y in 0..c.height {
+        for x in 0..c.width {
+            let k = (y * c.width + x) as usize;
+            let hit = r.closest_hit(c.eye, c.ray_direction(x as f32 + 0.5, y as f32 + 0.5));
+            match (view.covered(k), hit) {
+                (true, Some(h)) => {
+                    covered += 1;
+                    // The ray's direction has unit length along the view axis, so t is depth.
+                    let rel = (h.t - view.depth[k]).abs() / h.t;
+                    assert!(rel < 1e-4, "pixel {x},{y}: raster depth {} vs ray {}", view.depth[k], h.t);
+                    let p = c.eye + c.ray_direction(x as f32 + 0.5, y as f32 + 0.5) * h.t;
+                    assert!((p - view.position[k]).length() < 1e-3 * s.bounds.diagonal());
+                }
+                (false, None) => {}
+                // Silhouette pixels whose centre lies within the 1/256-pixel snapping of an edge.
+                _ => disagree += 1,
+            }
+        }
+    }
+    assert!(covered > 10_000);
+    assert!(
+        (disagree as f64) < 0.001 * (c.width * c.height) as f64,
+        "{disagree} pixels disagree on coverage"
+    );
+}
+
+#[test]
+fn sm_mismatch_falls_as_resolution_rises() {
+    let (s, c, l) = bunny();
+    let view = ViewSamples::render(&s, &c);
+    let frame = Frame::new(&s, &c, &l, &view);
+    let reference = Reference::build(&s).visibility(&frame, &[vec2(0.5, 0.5)]);
+    let mut last = f64::INFINITY;
+    for res in [128, 512, 2048] {
+        let mut sm = techniques::create("sm").unwrap();
+        sm.set_param("resolution", &res.to_string()).unwrap();
+        let m = compare(&view, &sm.render(&frame).unwrap().visibility, &reference);
+        assert!(m.mismatch_rate < last, "resolution {res}: mismatch {} did not fall below {last}", m.mismatch_rate);
+        last = m.mismatch_rate;
+    }
+    assert!(last < 0.01, "sm at 2048² still mismatches {last}");
+}
+
+#[test]
+fn shadow_maps_agree_with_reference_for_every_light_kind() {
+    let (s, c, _) = bunny();
+    let view = ViewSamples::render(&s, &c);
+    let b = s.bounds;
+    let top = b.center() + vec3(0.3, 1.5, 0.4) * b.diagonal() * 0.6;
+    for l in [
+        Light::Directional {
+            to_light: vec3(0.3, 1.0, -0.2).normalize(),
+        },
+        Light::Point { position: top },
+        Light::Spot {
+            position: top,
+            target: b.center(),
+            fov_deg: 70.0,
+        },
+    ] {
+        let frame = Frame::new(&s, &c, &l, &view);
+        let reference = Reference::build(&s).visibility(&frame, &[vec2(0.5, 0.5)]);
+        let lit = reference.value.iter().enumerate().filter(|(k, v)| view.covered(*k) && v.x > 0.5).count();
+        let dark = view.covered_count() - lit;
+        assert!(lit > 1000 && dark > 1000, "{}: the frame must show light and shadow", l.kind());
+        let mut sm = techniques::create("pcf").unwrap();
+        let m = compare(&view, &sm.render(&frame).unwrap().visibility, &reference);
+        assert!(m.mismatch_rate < 0.02, "{}: pcf mismatch {}", l.kind(), m.mismatch_rate);
+    }
+}
+
+#[test]
+fn semi_transparent_casters_multiply_their_transmittance() {
+    // Two tinted sheets over a floor: the floor under both gets the product of the tints.
+    let mut s = Scene::new("sheets");
+    let floor = s.add_material(Material::default());
+    let red = s.add_material(Material {
+        name: "red".into(),
+        color: Vec3::ONE,
+        transmittance: vec3(0.9, 0.2, 0.2),
+    });
+    let blue = s.add_material(Material {
+        name: "blue".into(),
+        color: Vec3::ONE,
+        transmittance: vec3(0.3, 0.3, 0.8),
+    });
+    let quad = |s: &mut Scene, y: f32, h: f32, m: u32| {
+        s.push([vec3(-h, y, -h), vec3(h, y, h), vec3(h, y, -h)], m);
+        s.push([vec3(-h, y, -h), vec3(-h, y, h), vec3(h, y, h)], m);
+    };
+    quad(&mut s, 0.0, 4.0, floor);
+    quad(&mut s, 1.0, 1.0, red);
+    quad(&mut s, 2.0, 0.5, blue);
+    let mut c = Camera::look_at(vec3(0.0, 8.0, 0.01), Vec3::ZERO, 40.0, 64, 64);
+    c.fit_depth_range(&s.bounds);
+    let l = Light::Directional { to_light: Vec3::Y };
+    let view = ViewSamples::render(&s, &c);
+    let frame = Frame::new(&s, &c, &l, &view);
+    let v = Reference::build(&s).visibility(&frame, &[vec2(0.5, 0.5)]);
+    // The centre pixel sees the blue sheet (top), which only the light reaches: lit.
+    let centre = (32 * 64 + 32) as usize;
+    assert_eq!(view.triangle[centre] / 2, 2);
+    assert_eq!(v.value[centre], Vec3::ONE);
+    // Look at the floor from below the sheets' edge: a point under both, traced directly.
+    let r = Reference::build(&s);
+    let t = r.occlusion(vec3(0.1, 0.0, 0.3), Vec3::Y, f32::INFINITY, 0);
+    assert_eq!(t, vec3(0.9, 0.2, 0.2) * vec3(0.3, 0.3, 0.8));
+}
+
+#[test]
+fn results_are_identical_for_one_two_and_four_threads() {
+    let (s, mut c, l) = bunny();
+    c.width = 160;
+    c.height = 120;
+    let mut outputs = Vec::new();
+    for threads in [1, 2, 4] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let out = pool.install(|| {
+            let view = ViewSamples::render(&s, &c);
+            let frame = Frame::new(&s, &c, &l, &view);
+            let mut per = Vec::new();
+            for name in techniques::ALL {
+                let mut t = techniques::create(name).unwrap();
+                let r = t.render(&frame).unwrap_or_else(|e| panic!("{name}: {e}"));
+                per.push((name.to_string(), r.visibility.value));
+            }
+            (view.depth.clone(), view.triangle.clone(), per)
+        });
+        outputs.push(out);
+    }
+    for o in &outputs[1..] {
+        assert!(o.0.iter().zip(&outputs[0].0).all(|(a, b)| a.to_bits() == b.to_bits()), "camera pass depth differs");
+        assert_eq!(o.1, outputs[0].1, "camera pass ids differ");
+        for ((name, a), (_, b)) in o.2.iter().zip(&outputs[0].2) {
+            let same = a.iter().zip(b).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits));
+            assert!(same, "{name} differs across thread counts");
+        }
+    }
+}
