@@ -70,10 +70,11 @@ impl Light {
         Ok(())
     }
 
-    /// The same light with its direction normalized.
+    /// The same light with its direction normalized. A direction that is already of unit
+    /// length is kept bit for bit, so recorded lights reproduce exactly.
     pub fn normalized(self) -> Light {
         match self {
-            Light::Directional { to_light } => Light::Directional {
+            Light::Directional { to_light } if (to_light.length_squared() - 1.0).abs() > 4.0 * f32::EPSILON => Light::Directional {
                 to_light: to_light.normalize(),
             },
             l => l,

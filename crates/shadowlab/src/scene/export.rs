@@ -19,29 +19,37 @@ pub fn write_obj(scene: &Scene, path: &Path) -> Result<()> {
     let _ = writeln!(obj, "# shadowlab scene export: {} ({} triangles, world space)", scene.name, scene.len());
     let _ = writeln!(obj, "mtllib {mtl_name}");
     let mut mtl = String::new();
-    let mut next_vertex = 1usize;
-    for (mi, m) in scene.materials.iter().enumerate() {
-        let tris: Vec<usize> = (0..scene.len()).filter(|&i| scene.material[i] as usize == mi).collect();
-        let name = format!("m{mi}_{}", m.name.replace(|c: char| c.is_whitespace(), "_"));
-        let _ = writeln!(mtl, "newmtl {name}\nKd {} {} {}", m.color.x, m.color.y, m.color.z);
+    let names: Vec<String> = scene
+        .materials
+        .iter()
+        .enumerate()
+        .map(|(mi, m)| format!("m{mi}_{}", m.name.replace(|c: char| c.is_whitespace(), "_")))
+        .collect();
+    for (m, name) in scene.materials.iter().zip(&names) {
+        // `{:?}` prints the shortest text that parses back to the same f32.
+        let _ = writeln!(mtl, "newmtl {name}\nKd {:?} {:?} {:?}", m.color.x, m.color.y, m.color.z);
         let t = m.transmittance;
-        let opacity = 1.0 - t.max_element();
-        let _ = writeln!(mtl, "d {opacity}\nTf {} {} {}\n", t.x, t.y, t.z);
-        if tris.is_empty() {
-            continue;
+        // Opaque: d 1. Otherwise d < 1 and Tf carries the RGB transmittance exactly.
+        let opacity = if m.is_opaque() { 1.0 } else { (1.0 - t.max_element()).min(0.999) };
+        let _ = writeln!(mtl, "d {opacity:?}\nTf {:?} {:?} {:?}\n", t.x, t.y, t.z);
+    }
+    // Triangles keep their order (ties between coincident surfaces resolve the same way on
+    // re-import); a new `o` group starts where the material changes, which for scenes built
+    // mesh by mesh is one group per material.
+    let mut current = u32::MAX;
+    let mut next_vertex = 1usize;
+    for i in 0..scene.len() {
+        let mi = scene.material[i];
+        if mi != current {
+            current = mi;
+            let name = &names[mi as usize];
+            let _ = writeln!(obj, "o {name}\nusemtl {name}");
         }
-        let _ = writeln!(obj, "o {name}\nusemtl {name}");
-        for &i in &tris {
-            for p in scene.triangle(i) {
-                // `{:?}` prints the shortest text that parses back to the same f32.
-                let _ = writeln!(obj, "v {:?} {:?} {:?}", p.x, p.y, p.z);
-            }
+        for p in scene.triangle(i) {
+            let _ = writeln!(obj, "v {:?} {:?} {:?}", p.x, p.y, p.z);
         }
-        for k in 0..tris.len() {
-            let b = next_vertex + 3 * k;
-            let _ = writeln!(obj, "f {} {} {}", b, b + 1, b + 2);
-        }
-        next_vertex += 3 * tris.len();
+        let _ = writeln!(obj, "f {} {} {}", next_vertex, next_vertex + 1, next_vertex + 2);
+        next_vertex += 3;
     }
     std::fs::write(path, obj).map_err(out_err)?;
     std::fs::write(&mtl_path, mtl).map_err(|e| Error::Output {
