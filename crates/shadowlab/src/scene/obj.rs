@@ -1,7 +1,7 @@
 //! Wavefront OBJ with its `.mtl` materials, read with the `tobj` crate.
 //!
 //! Colours come from `Kd`; opacity from `d` (dissolve) or `Tr` (= 1 − d), and an explicit
-//! RGB `Tf` (transmission filter) when present together with `d` < 1. Missing `.mtl`
+//! RGB `Tf` (transmission filter), taken as the transmittance when `d` < 1. Missing `.mtl`
 //! files and missing textures are not errors: the mesh loads with a default material.
 
 use super::{Material, Scene};
@@ -9,21 +9,45 @@ use crate::error::{Error, Result};
 use crate::math::{vec3, Mat4, Vec3};
 use std::path::Path;
 
+const LOAD_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
+    triangulate: true,
+    single_index: false,
+    ignore_points: true,
+    ignore_lines: true,
+};
+
 /// Loads an OBJ file.
 pub fn load(path: &Path) -> Result<Scene> {
-    let opts = tobj::LoadOptions {
-        triangulate: true,
-        single_index: false,
-        ignore_points: true,
-        ignore_lines: true,
-    };
-    let (models, mats) = tobj::load_obj(path, &opts).map_err(|e| match e {
+    check_faces(path)?;
+    let (models, mats) = tobj::load_obj(path, &LOAD_OPTIONS).map_err(|e| match e {
         tobj::LoadError::OpenFileFailed => Error::Io {
             path: path.into(),
             source: std::io::Error::new(std::io::ErrorKind::NotFound, "the file cannot be opened"),
         },
         other => Error::format(path, format!("not a valid OBJ file ({other})")),
     })?;
+    build(path, &models, mats)
+}
+
+/// Loads OBJ text held in memory, with the text of its `.mtl` file if it has one (every
+/// `mtllib` line resolves to that text). `name` names the mesh in the scene and in errors.
+pub fn load_from_str(name: &str, obj: &str, mtl: Option<&str>) -> Result<Scene> {
+    let path = Path::new(name);
+    let loader = |_: &Path| match mtl {
+        Some(text) => tobj::load_mtl_buf(&mut text.as_bytes()),
+        None => Err(tobj::LoadError::OpenFileFailed),
+    };
+    let (models, mats) = tobj::load_obj_buf(&mut obj.as_bytes(), &LOAD_OPTIONS, loader)
+        .map_err(|e| Error::format(path, format!("not a valid OBJ file ({e})")))?;
+    build(path, &models, mats)
+}
+
+/// Converts tobj's models and materials into a scene; `path` names the source in errors.
+fn build(
+    path: &Path,
+    models: &[tobj::Model],
+    mats: std::result::Result<Vec<tobj::Material>, tobj::LoadError>,
+) -> Result<Scene> {
     // A missing or broken .mtl leaves every triangle with the default material.
     let mats = mats.unwrap_or_default();
     let mut scene = Scene::new(path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
@@ -32,7 +56,7 @@ pub fn load(path: &Path) -> Result<Scene> {
     for m in &mats {
         scene.add_material(convert(m));
     }
-    for model in &models {
+    for model in models {
         let mesh = &model.mesh;
         let nverts = mesh.positions.len() / 3;
         let positions: Vec<Vec3> = mesh
@@ -65,6 +89,28 @@ pub fn load(path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
+/// Fails on a face line with fewer than three vertices, which `tobj` drops without a
+/// word: it is what a file cut short in its face list ends with.
+fn check_faces(path: &Path) -> Result<()> {
+    let bytes = std::fs::read(path).map_err(|e| Error::Io {
+        path: path.into(),
+        source: e,
+    })?;
+    for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let mut tokens = line.split(|b| b.is_ascii_whitespace()).filter(|t| !t.is_empty());
+        if tokens.next() == Some(b"f".as_slice()) {
+            let k = tokens.count();
+            if k < 3 {
+                return Err(Error::format(
+                    path,
+                    format!("line {}: a face with {k} vertices, fewer than 3 (is the file truncated?)", n + 1),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn convert(m: &tobj::Material) -> Material {
     let color = m
         .diffuse
@@ -83,7 +129,9 @@ fn convert(m: &tobj::Material) -> Material {
         if let Some(tf) = m.unknown_param.get("Tf") {
             let v: Vec<f32> = tf.split_whitespace().filter_map(|s| s.parse().ok()).collect();
             if v.len() == 3 && v.iter().all(|x| x.is_finite()) {
-                transmittance = vec3(v[0], v[1], v[2]).clamp(Vec3::ZERO, Vec3::ONE) * (1.0 - opacity);
+                // Tf is the RGB share of light passing a non-opaque surface: taken as the
+                // transmittance itself, so an exported scene reads back exactly.
+                transmittance = vec3(v[0], v[1], v[2]).clamp(Vec3::ZERO, Vec3::ONE);
             }
         }
     }
