@@ -203,6 +203,13 @@ pub fn render(a: &RenderArgs) -> Result<()> {
     let bar = progress::bar(setup.frames as u64, format!("rendering {}", a.technique));
     let mut last = None;
     let mut camera_pass_ms = 0.0;
+    // A sequence also becomes an animated GIF beside the numbered PNGs.
+    let mut animation = None;
+    if a.scene.frames > 1 {
+        let gif = a.output.with_extension("gif");
+        check_new_file(&gif, a.force, "--output animation")?;
+        animation = Some(report::Animation::create(&gif)?);
+    }
     for i in 0..setup.frames {
         let (camera, view) = camera_pass(&setup, i)?;
         camera_pass_ms = view.time_ms;
@@ -214,11 +221,18 @@ pub fn render(a: &RenderArgs) -> Result<()> {
             let img = shade::shade(&setup.scene, &view, &setup.light, &run.last.as_ref().unwrap().0.visibility);
             let stem = a.output.with_extension("");
             shade::save_png(&img, Path::new(&format!("{}-{i:04}.png", stem.display())))?;
+            if let Some(anim) = animation.as_mut() {
+                anim.push(&img)?;
+            }
         }
         bar.inc(1);
         last = Some((camera, view));
     }
     bar.finish_and_clear();
+    let pb = progress::step("writing outputs");
+    if let Some(anim) = animation {
+        anim.finish()?;
+    }
     let (camera, view) = last.expect("at least one frame");
     let (shadows, time_ms) = run.last.take().expect("rendered");
     let img = shade::shade(&setup.scene, &view, &setup.light, &shadows.visibility);
@@ -248,6 +262,7 @@ pub fn render(a: &RenderArgs) -> Result<()> {
     if let Some(p) = &a.stats {
         write_json(p, &Value::Object(st))?;
     }
+    pb.finish_and_clear();
     if !progress::quiet() {
         eprintln!("{}: {} in {:.1} ms, wrote {}", setup.scene.name, run.label, time_ms, a.output.display());
     }
@@ -362,21 +377,40 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     if let Some(d) = &dump {
         std::fs::create_dir_all(d)?;
     }
+    // A sequence writes DIR/frames/<run>-NNNN.png and an animated DIR/<run>.gif per run.
+    let mut animations = Vec::new();
+    if setup.frames > 1 {
+        let fdir = a.out.join("frames");
+        std::fs::create_dir_all(&fdir).with_context(|| format!("cannot create {}", fdir.display()))?;
+        for run in &runs {
+            animations.push(report::Animation::create(&a.out.join(format!("{}.gif", slug(&run.label))))?);
+        }
+    }
     let bar = progress::bar((setup.frames * runs.len()) as u64, "techniques");
     let mut last = None;
     for i in 0..setup.frames {
+        bar.set_message(format!("frame {}/{} camera pass", i + 1, setup.frames));
         let (camera, view) = camera_pass(&setup, i)?;
         let mut frame = Frame::new(&setup.scene, &camera, &setup.light, &view);
         frame.index = i;
         frame.dump_dir = dump.as_deref();
-        for run in runs.iter_mut() {
+        for (r, run) in runs.iter_mut().enumerate() {
             bar.set_message(format!("frame {}/{} {}", i + 1, setup.frames, run.label));
             run_frame(run, &frame)?;
+            if let Some(anim) = animations.get_mut(r) {
+                let (s, _) = run.last.as_ref().expect("just rendered");
+                let img = shade::shade(&setup.scene, &view, &setup.light, &s.visibility);
+                shade::save_png(&img, &a.out.join(format!("frames/{}-{i:04}.png", slug(&run.label))))?;
+                anim.push(&img)?;
+            }
             bar.inc(1);
         }
         last = Some((camera, view));
     }
     bar.finish_and_clear();
+    for anim in animations {
+        anim.finish()?;
+    }
     let (camera, view) = last.expect("at least one frame");
     let frame = Frame::new(&setup.scene, &camera, &setup.light, &view);
     let pb = progress::step(format!("ray-traced reference ({} spp)", a.reference_spp));
@@ -389,14 +423,19 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
 
     let mut results = Vec::new();
     let mut rows = Vec::new();
+    let bar = progress::bar(runs.len() as u64 + 1, "writing images");
     let ref_img = shade::shade(&setup.scene, &view, &setup.light, &ref_vis);
     shade::save_png(&ref_img, &a.out.join("reference.png"))?;
+    bar.inc(1);
     for run in &runs {
         let (s, ms) = run.last.as_ref().expect("every run rendered");
+        bar.set_message(format!("writing {}", run.label));
         let m: Metrics = measure(&view, &s.visibility, &ref_vis);
         let file = slug(&run.label);
-        shade::save_png(&shade::shade(&setup.scene, &view, &setup.light, &s.visibility), &a.out.join(format!("{file}.png")))?;
-        shade::save_png(&shade::error_image(&view, &s.visibility, &ref_vis), &a.out.join(format!("{file}-error.png")))?;
+        let shaded = shade::shade(&setup.scene, &view, &setup.light, &s.visibility);
+        let error_img = shade::error_image(&view, &s.visibility, &ref_vis);
+        shade::save_png(&shaded, &a.out.join(format!("{file}.png")))?;
+        shade::save_png(&error_img, &a.out.join(format!("{file}-error.png")))?;
         let mut r = serde_json::Map::new();
         r.insert("technique".into(), json!(run.technique.name()));
         r.insert("label".into(), json!(run.label));
@@ -409,10 +448,20 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         r.insert("error_image".into(), json!(format!("{file}-error.png")));
         if setup.frames > 1 {
             r.insert("frames".into(), json!(run.frames));
+            r.insert("animation".into(), json!(format!("{file}.gif")));
         }
+        if let Some((k, v)) = run.label.strip_prefix(&format!("{}.", run.technique.name())).and_then(|kv| kv.split_once('=')) {
+            r.insert("sweep".into(), json!({"key": k, "value": v}));
+        }
+        r.insert("worst_region".into(), match report::worst_region(&view, &s.visibility, &ref_vis) {
+            Some(region) => region.to_json(&report::write_crop(&a.out, &file, &region, &[&ref_img, &shaded, &error_img])?),
+            None => Value::Null,
+        });
         rows.push((run.label.clone(), *ms, m));
         results.push(Value::Object(r));
+        bar.inc(1);
     }
+    bar.finish_and_clear();
     let (cam_json, light_json) = provenance(&camera, &setup.light);
     let metrics = json!({
         "scene": setup.scene.name,
@@ -433,9 +482,12 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             "image": "reference.png",
         },
         "results": results,
+        "dump": dump.as_ref().map(|_| "dump"),
     });
+    let pb = progress::step("writing report");
     write_json(&a.out.join("metrics.json"), &metrics)?;
     report::write_html(&a.out, &metrics)?;
+    pb.finish_and_clear();
     if !progress::quiet() {
         println!(
             "{} — {} triangles, {}x{}, {} covered pixels; camera pass {:.1} ms; reference {:.1} ms (BVH {:.1} + trace {:.1})",

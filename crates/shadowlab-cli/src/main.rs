@@ -6,6 +6,7 @@
 mod bench;
 mod commands;
 mod config;
+mod plots;
 mod progress;
 mod report;
 
