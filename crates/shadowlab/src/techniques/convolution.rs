@@ -1,24 +1,504 @@
-//! `csm` (being written).
+//! `csm`: convolution shadow maps (Annen, Mertens, Bekaert, Seidel & Kautz, "Convolution
+//! Shadow Maps", EGSR 2007).
+//!
+//! The binary shadow test `f(d, z) = H(z − d)` is expanded in a truncated Fourier series
+//! whose terms separate into functions of the receiver depth `d` and of the map depth `z`
+//! (Eq. 13), so the map can be turned into basis images `sin(c_k z)`, `cos(c_k z)` that are
+//! filtered *before* the test: blurred, mip-mapped and read with tri-linear or anisotropic
+//! filtering, which removes the screen-space aliasing of minified shadows.
+//!
+//! Pipeline per frame: the light's linear depth map (the shared rasterizer, through
+//! `shadow_map::render_light_maps`; six cube faces for a point light, each with its own
+//! basis images) → `2M` basis values per texel (8-bit unsigned normalized by default, as
+//! in the paper, or f32) → optional separable Gaussian blur → full mip chain → per pixel a
+//! filtered look-up whose footprint comes from the camera pass's screen-space derivatives
+//! (see [`super::filtering`]) → reconstruction with Eq. 13, clamped to `[0, 1]`.
+//!
+//! Invariants: `c_k = π(2k − 1)` for `k = 1..=M`; the basis values of texel `p` are
+//! `B_{2k−1} = sin(c_k z(p))`, `B_{2k} = cos(c_k z(p))` and the shadow term is
+//! `clamp(scale · (½ + Σ_k σ_k (2/c_k)[cos(c_k d′) B_{2k−1} − sin(c_k d′) B_{2k}]), 0, 1)`
+//! with `σ_k = exp(−α (k/M)²)` (Section 3.2.1) and `d′ = d − offset` (Section 3.2.2).
+//! Filtering the basis equals filtering the shadow test when `d` is constant over the
+//! filter's support (Eq. 8), up to the 8-bit quantization.
+//!
+//! Departures from the paper, and why:
+//! - Eq. 11 prints `sin(c_k(d − z))`, which is 1 where the receiver is *behind* the map;
+//!   Eq. 13 (implemented) is `sin(c_k(z − d))`, the shadow test the paper defines in Eq. 1.
+//! - The paper does not give its offset; here the default (`offset = auto`) is the
+//!   smallest `t > 0` where the attenuated reconstruction of the step first comes within
+//!   [`OFFSET_PLATEAU_TOLERANCE`] of its plateau (`min(1, max g)`), so a surface that is
+//!   its own occluder (`z = d`) is lit, whatever `M` and `α`.
+//! - Depths are normalized over the depth interval the map actually holds (the paper asks
+//!   for a tightly fitted light frustum), into `[0, 1 − 2·offset]` rather than `[0, 1]`:
+//!   the series is periodic with period 2 and the offset shifts `z − d` up, so without
+//!   that margin a receiver far in front of its neighbours' depths (`z − d + offset` near
+//!   or past 1) would fall on the next period's step and turn dark.
+//! - The paper's α is not given; [`DEFAULT_ALPHA`] states the trade-off chosen.
+//!
+//! Known artifacts (as in the paper): light leaks where an occluder is within about the
+//! offset (plus the step's half-width, ≈ 0.07 of the depth range at M = 4) of its receiver
+//! — contact shadows fade, more so for small M; ringing leaves shadowed areas slightly
+//! uneven; a sloped receiver filtered over a wide footprint shades itself once the depth
+//! change across the footprint exceeds the offset; point-light cube faces filter up to their
+//! own edges only, so wide filters show seams.
 
-use super::{unknown_param, Frame, ShadowTechnique, Shadows};
+use super::filtering::{check_map_size, Channel, FilterSettings, FilteredMaps};
+use super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
+use super::{
+    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
+};
 use crate::error::{Error, Result};
 use std::collections::BTreeMap;
+use std::f32::consts::PI;
+
+/// Default truncation order M (the paper's recommended setting).
+pub const DEFAULT_M: u32 = 4;
+/// The largest truncation order accepted.
+pub const MAX_M: u32 = 16;
+/// Default ringing attenuation α: at M = 4 it lowers the Gibbs overshoot from 9% to 2.5% and
+/// the ringing in shadow (beyond |z − d| = 1/M) from 0.054 to 0.038, while keeping the lit
+/// offset at 0.10 of the depth range (0.16 at α = 1). Larger α flattens the step and needs a
+/// larger offset, which fades more contact shadows.
+pub const DEFAULT_ALPHA: f32 = 0.5;
+/// Default scale of the reconstructed step (Section 3.2.2): 1 leaves it as it is; 2 makes it
+/// steeper and lights `z = d` without an offset, at the price of sharper (re-aliased) shadows.
+pub const DEFAULT_SCALE: f32 = 1.0;
+/// Where the attenuated step never overshoots 1 (large α), the automatic offset is where it
+/// first comes this close to its maximum: smaller values light self-occluding surfaces more
+/// fully but push the offset out (more contact-shadow leaking).
+pub const OFFSET_PLATEAU_TOLERANCE: f32 = 0.01;
+/// The automatic offset aims the step at `1 + LIT_MARGIN` for a self-occluding surface, so
+/// that after clamping it is fully lit despite the 8-bit quantization of the basis (whose
+/// reconstruction error stays below about 0.006 at M = 4); a larger margin costs offset.
+pub const LIT_MARGIN: f32 = 0.01;
+/// The largest offset accepted, in normalized depth: beyond it the margin that keeps
+/// `z − d + offset` inside one period of the series vanishes.
+pub const MAX_OFFSET: f32 = 0.25;
+/// Resolution of the search for the automatic offset, in normalized depth.
+const OFFSET_SEARCH_STEP: f32 = 1.0 / 8192.0;
+
+/// The truncated, attenuated Fourier expansion of the shadow test (Eqs. 10–14).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Expansion {
+    /// Truncation order M: `2M` basis functions.
+    pub m: u32,
+    /// Ringing attenuation α (0 leaves the series unchanged).
+    pub alpha: f32,
+}
+
+impl Expansion {
+    /// The frequency `c_k = π(2k − 1)` of term `k` (1-based).
+    #[inline]
+    pub fn c(k: u32) -> f32 {
+        PI * (2 * k - 1) as f32
+    }
+
+    /// The attenuation `σ_k = exp(−α (k/M)²)` of term `k`.
+    #[inline]
+    pub fn attenuation(&self, k: u32) -> f32 {
+        let r = k as f32 / self.m as f32;
+        (-self.alpha * r * r).exp()
+    }
+
+    /// Number of basis images, `2M`.
+    pub fn channels(&self) -> usize {
+        2 * self.m as usize
+    }
+
+    /// Writes `sin(c_k x)` into `out[2(k−1)]` and `cos(c_k x)` into `out[2(k−1)+1]` for
+    /// `k = 1..=M`, by rotating the angle `πx` in steps of `2πx`.
+    #[inline]
+    pub fn sin_cos(m: u32, x: f32, out: &mut [f32]) {
+        let (s1, c1) = sin_cos_pi(x);
+        let (s2, c2) = (2.0 * s1 * c1, c1 * c1 - s1 * s1);
+        let (mut s, mut c) = (s1, c1);
+        for pair in out[..2 * m as usize].chunks_exact_mut(2) {
+            pair[0] = s;
+            pair[1] = c;
+            (s, c) = (s * c2 + c * s2, c * c2 - s * s2);
+        }
+    }
+
+    /// The basis values `B_i(z)` of a map depth `z` (Eq. 14).
+    #[inline]
+    pub fn basis(&self, z: f32, out: &mut [f32]) {
+        Self::sin_cos(self.m, z, out);
+    }
+
+    /// The expansion at receiver depth `d` against (filtered) basis values: `½ + Σ a_i(d) B_i`,
+    /// attenuated, not offset, not scaled, not clamped.
+    pub fn reconstruct(&self, d: f32, basis: &[f32]) -> f32 {
+        self.reconstruction().eval(d, basis)
+    }
+
+    /// Eq. 13 with the constant factors `2σ_k / c_k` of its coefficients computed once.
+    pub fn reconstruction(&self) -> Reconstruction {
+        let mut weight = [0.0; MAX_M as usize];
+        for k in 1..=self.m {
+            weight[k as usize - 1] = 2.0 * self.attenuation(k) / Self::c(k);
+        }
+        Reconstruction { m: self.m, weight }
+    }
+
+    /// The reconstructed step as a function of `t = z − d`: `½ + Σ σ_k (2/c_k) sin(c_k t)`.
+    pub fn step(&self, t: f32) -> f32 {
+        0.5 + (1..=self.m)
+            .map(|k| 2.0 * self.attenuation(k) / Self::c(k) * (Self::c(k) * t).sin())
+            .sum::<f32>()
+    }
+
+    /// The automatic offset: the smallest `t > 0` at which [`Self::step`] reaches
+    /// `1 + LIT_MARGIN` — so a self-occluding surface clamps to fully lit even with the
+    /// 8-bit quantization noise — or, where the step's maximum over `(0, ½]` stays below
+    /// that, comes within [`OFFSET_PLATEAU_TOLERANCE`] of its maximum.
+    pub fn auto_offset(&self) -> f32 {
+        let n = (0.5 / OFFSET_SEARCH_STEP) as u32;
+        let values: Vec<f32> = (1..=n)
+            .map(|i| self.step(i as f32 * OFFSET_SEARCH_STEP))
+            .collect();
+        let peak = values.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let target = if peak >= 1.0 + LIT_MARGIN {
+            1.0 + LIT_MARGIN
+        } else {
+            peak - OFFSET_PLATEAU_TOLERANCE
+        };
+        let i = values
+            .iter()
+            .position(|&v| v >= target)
+            .unwrap_or(values.len() - 1);
+        ((i + 1) as f32 * OFFSET_SEARCH_STEP).min(MAX_OFFSET)
+    }
+}
+
+/// `sin(πx)` and `cos(πx)` for `|x| < 2³¹`: reduction to `r = x − round(x)` and Taylor polynomials of
+/// degree 11 and 12 on `πr ∈ [−π/2, π/2]` (error below 2·10⁻⁷, several times faster than
+/// two library calls; the basis of a 2048² map needs one pair per texel).
+#[inline(always)]
+pub fn sin_cos_pi(x: f32) -> (f32, f32) {
+    let n = super::filtering::fast_floor(x + 0.5);
+    let r = (x - n) * PI;
+    let r2 = r * r;
+    let s = r
+        * (1.0
+            + r2 * (-1.0 / 6.0
+                + r2 * (1.0 / 120.0
+                    + r2 * (-1.0 / 5040.0 + r2 * (1.0 / 362_880.0 + r2 * (-1.0 / 39_916_800.0))))));
+    let c = 1.0
+        + r2 * (-0.5
+            + r2 * (1.0 / 24.0
+                + r2 * (-1.0 / 720.0
+                    + r2 * (1.0 / 40_320.0
+                        + r2 * (-1.0 / 3_628_800.0 + r2 * (1.0 / 479_001_600.0))))));
+    // An odd number of half-turns flips both.
+    if (n as i64) & 1 == 0 {
+        (s, c)
+    } else {
+        (-s, -c)
+    }
+}
+
+/// Eq. 13 ready to evaluate per pixel (see [`Expansion::reconstruction`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reconstruction {
+    m: u32,
+    weight: [f32; MAX_M as usize],
+}
+
+impl Reconstruction {
+    /// `½ + Σ_k (2σ_k/c_k)[cos(c_k d) B_{2k−1} − sin(c_k d) B_{2k}]` (unclamped).
+    #[inline]
+    pub fn eval(&self, d: f32, basis: &[f32]) -> f32 {
+        let mut sc = [0.0f32; 2 * MAX_M as usize];
+        Expansion::sin_cos(self.m, d, &mut sc);
+        let m = self.m as usize;
+        let mut sum = 0.0;
+        for ((w, t), b) in self.weight[..m]
+            .iter()
+            .zip(sc[..2 * m].chunks_exact(2))
+            .zip(basis[..2 * m].chunks_exact(2))
+        {
+            sum += w * (t[1] * b[0] - t[0] * b[1]);
+        }
+        0.5 + sum
+    }
+}
+
+/// Storage of the basis images.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Precision {
+    /// 8-bit unsigned normalized, `[-1, 1] → 0..=255` (the paper's setting).
+    U8,
+    /// 32-bit float.
+    F32,
+}
 
 /// The `csm` technique.
-#[derive(Clone, Debug, Default)]
-pub struct Convolution;
+#[derive(Clone, Debug)]
+pub struct Convolution {
+    /// Map side in texels.
+    pub resolution: u32,
+    /// Truncation order M.
+    pub m: u32,
+    /// Ringing attenuation α.
+    pub alpha: f32,
+    /// Offset subtracted from the receiver depth, in normalized depth; `None` = automatic.
+    pub offset: Option<f32>,
+    /// Scale of the reconstructed step before clamping.
+    pub scale: f32,
+    /// Storage of the basis images.
+    pub precision: Precision,
+    /// Blur, mip-mapping and look-up filter.
+    pub filtering: FilterSettings,
+}
+
+impl Default for Convolution {
+    fn default() -> Self {
+        Convolution {
+            resolution: DEFAULT_RESOLUTION,
+            m: DEFAULT_M,
+            alpha: DEFAULT_ALPHA,
+            offset: None,
+            scale: DEFAULT_SCALE,
+            precision: Precision::U8,
+            filtering: FilterSettings::default(),
+        }
+    }
+}
+
+const KEYS: &[&str] = &[
+    "resolution",
+    "m",
+    "alpha",
+    "offset",
+    "scale",
+    "precision",
+    "blur",
+    "filter",
+    "max-aniso",
+];
+
+impl Convolution {
+    /// The expansion in effect.
+    pub fn expansion(&self) -> Expansion {
+        Expansion {
+            m: self.m,
+            alpha: self.alpha,
+        }
+    }
+
+    /// The offset in effect, in normalized depth.
+    pub fn resolved_offset(&self) -> f32 {
+        self.offset
+            .unwrap_or_else(|| self.expansion().auto_offset())
+    }
+
+    fn run<T: Channel>(&self, frame: &Frame, stats: &mut Stats) -> Result<Vec<crate::math::Vec3>> {
+        let exp = self.expansion();
+        let offset = self.resolved_offset();
+        let span = 1.0 - 2.0 * offset;
+        let ch = exp.channels();
+        let views = if matches!(frame.light, crate::light::Light::Point { .. }) {
+            6
+        } else {
+            1
+        };
+        check_map_size("csm", views, self.resolution, ch, T::BYTES)?;
+        let maps = FilteredMaps::<T>::build(
+            frame,
+            self.resolution,
+            ch,
+            span,
+            &self.filtering,
+            stats,
+            |m, r, x, y, out| {
+                let z = r.normalize(m.depth[(y * m.width + x) as usize]);
+                exp.basis(z, out);
+                for v in out.iter_mut() {
+                    *v = T::encode_signed(*v);
+                }
+            },
+        );
+        let scale = self.scale;
+        let rec = exp.reconstruction();
+        let value = maps.lookup(frame, &self.filtering, stats, |d, raw| {
+            let mut b = [0.0f32; 2 * MAX_M as usize];
+            for (o, r) in b.iter_mut().zip(raw) {
+                *o = T::decode_signed(*r);
+            }
+            (scale * rec.eval(d - offset, &b[..raw.len()])).clamp(0.0, 1.0)
+        });
+        stats.memory_bytes = maps.memory_bytes();
+        stats.count("depth_map_bytes", maps.depth_bytes as f64);
+        stats.count("basis_images", (ch * maps.chains.len()) as f64);
+        stats.count("offset", offset as f64);
+        if let Some(r) = maps.ranges.first() {
+            // The offset in world units: how far in front of a receiver an occluder must be
+            // before its shadow starts to show.
+            stats.count("depth_range", (r.far - r.near) as f64);
+            stats.count("offset_world", (offset / span * (r.far - r.near)) as f64);
+        }
+        stats.count(
+            "mip_levels",
+            maps.chains.first().map_or(0, |c| c.levels.len()) as f64,
+        );
+        if let Some(dir) = frame.dump_dir {
+            for (i, c) in maps.chains.iter().enumerate() {
+                let t = &c.levels[0];
+                let img = image::RgbImage::from_fn(t.width, t.height, |x, y| {
+                    let b = T::decode_signed(t.texel(x, y)[0].to_f32());
+                    // sin(c_1 z): blue where positive, red where negative, as in the paper's Figure 5.
+                    let g = (b.abs() * 255.0) as u8;
+                    if b >= 0.0 {
+                        image::Rgb([0, 0, g])
+                    } else {
+                        image::Rgb([g, 0, 0])
+                    }
+                });
+                crate::shade::save_png(&img, &dir.join(format!("csm-basis{i}-sin1.png")))?;
+            }
+        }
+        Ok(value)
+    }
+}
 
 impl ShadowTechnique for Convolution {
     fn name(&self) -> &'static str {
         "csm"
     }
+
     fn params(&self) -> BTreeMap<String, serde_json::Value> {
-        BTreeMap::new()
+        let mut m = BTreeMap::from([
+            ("resolution".to_string(), self.resolution.into()),
+            ("m".to_string(), self.m.into()),
+            ("alpha".to_string(), self.alpha.into()),
+            ("offset".to_string(), self.resolved_offset().into()),
+            ("scale".to_string(), self.scale.into()),
+            (
+                "precision".to_string(),
+                match self.precision {
+                    Precision::U8 => "u8",
+                    Precision::F32 => "f32",
+                }
+                .into(),
+            ),
+        ]);
+        self.filtering.params(&mut m);
+        m
     }
-    fn set_param(&mut self, key: &str, _value: &str) -> Result<()> {
-        Err(unknown_param("csm", key, &[]))
+
+    fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
+        let t = "csm";
+        if self.filtering.set_param(t, key, value)? {
+            return Ok(());
+        }
+        match key {
+            "resolution" => self.resolution = check_resolution(t, parse_value(t, key, value)?)?,
+            "m" => self.m = check_range(t, key, parse_value(t, key, value)?, 1, MAX_M)?,
+            "alpha" => self.alpha = check_range(t, key, parse_value(t, key, value)?, 0.0, 100.0)?,
+            "offset" => {
+                self.offset = if value.trim().eq_ignore_ascii_case("auto") {
+                    None
+                } else {
+                    Some(check_range(
+                        t,
+                        key,
+                        parse_value(t, key, value)?,
+                        0.0,
+                        MAX_OFFSET,
+                    )?)
+                }
+            }
+            "scale" => self.scale = check_range(t, key, parse_value(t, key, value)?, 0.01, 100.0)?,
+            "precision" => self.precision = match value.trim().to_ascii_lowercase().as_str() {
+                "u8" | "8" | "8bit" => Precision::U8,
+                "f32" | "32" | "float" => Precision::F32,
+                _ => return Err(Error::param(format!(
+                    "csm.precision = {value:?}: use u8 (8-bit basis images, the paper's) or f32"
+                ))),
+            },
+            _ => return Err(unknown_param(t, key, KEYS)),
+        }
+        Ok(())
     }
-    fn render(&mut self, _frame: &Frame) -> Result<Shadows> {
-        Err(Error::param("technique csm is not available yet"))
+
+    fn render(&mut self, frame: &Frame) -> Result<Shadows> {
+        check_resolution("csm", self.resolution)?;
+        let mut stats = Stats::default();
+        let value = match self.precision {
+            Precision::U8 => self.run::<u8>(frame, &mut stats)?,
+            Precision::F32 => self.run::<f32>(frame, &mut stats)?,
+        };
+        Ok(Shadows {
+            visibility: Visibility {
+                width: frame.view.width,
+                height: frame.view.height,
+                value,
+            },
+            stats,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sin_cos_recurrence_matches_direct_evaluation() {
+        let mut out = [0.0; 32];
+        for x in [0.0, 0.13, 0.5, 0.77, 1.0] {
+            Expansion::sin_cos(16, x, &mut out);
+            for k in 1..=16u32 {
+                let a = Expansion::c(k) * x;
+                assert!(
+                    (out[2 * (k - 1) as usize] - a.sin()).abs() < 2e-5,
+                    "x {x} k {k}"
+                );
+                assert!(
+                    (out[2 * (k - 1) as usize + 1] - a.cos()).abs() < 2e-5,
+                    "x {x} k {k}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn fast_sin_cos_pi_is_accurate() {
+        for i in -3000..=3000 {
+            let x = i as f32 / 1000.0;
+            let (s, c) = sin_cos_pi(x);
+            let (rs, rc) = (std::f64::consts::PI * x as f64).sin_cos();
+            assert!(
+                (s as f64 - rs).abs() < 5e-7 && (c as f64 - rc).abs() < 5e-7,
+                "x {x}"
+            );
+        }
+    }
+
+    #[test]
+    fn reconstruction_is_the_step_of_z_minus_d() {
+        let e = Expansion { m: 8, alpha: 0.5 };
+        let mut b = [0.0; 16];
+        for (z, d) in [(0.2, 0.7), (0.7, 0.2), (0.4, 0.41), (0.9, 0.1)] {
+            e.basis(z, &mut b);
+            assert!((e.reconstruct(d, &b) - e.step(z - d)).abs() < 1e-4);
+        }
+    }
+
+    #[test]
+    fn auto_offset_lights_self_occluders() {
+        for m in [4, 8, 16] {
+            let e = Expansion {
+                m,
+                alpha: DEFAULT_ALPHA,
+            };
+            let o = e.auto_offset();
+            assert!(o > 0.0 && o <= MAX_OFFSET);
+            assert!(e.step(o) >= 0.97, "m {m}: step(offset {o}) = {}", e.step(o));
+        }
+        assert!(
+            Expansion { m: 16, alpha: 0.5 }.auto_offset()
+                < Expansion { m: 4, alpha: 0.5 }.auto_offset()
+        );
     }
 }

@@ -1,0 +1,455 @@
+//! Convolution shadow maps (`csm`), variance shadow maps (`vsm`) and the shared texture
+//! filtering, checked against the analytic step function, brute-force filtering and the
+//! ray-traced reference.
+
+use shadowlab::camera::Camera;
+use shadowlab::compare::compare;
+use shadowlab::light::{Light, LightView};
+use shadowlab::math::{vec3, Vec2, Vec3};
+use shadowlab::reference::Reference;
+use shadowlab::sampling::{pattern, PatternKind};
+use shadowlab::scene::{Material, Scene};
+use shadowlab::techniques::convolution::Expansion;
+use shadowlab::techniques::filtering::{
+    blur, level_of_detail, light_footprint, Channel, Filter, Footprint, MipChain, Texture,
+};
+use shadowlab::techniques::{self, Frame};
+use shadowlab::view::ViewSamples;
+
+/// Heaviside step of `t = z − d`: lit (1) when the map depth is behind the receiver.
+fn heaviside(t: f32) -> f32 {
+    if t > 0.0 {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// Statistics of the reconstructed step over `t ∈ [−1, 1]`: mean absolute error, the
+/// 10–90% transition width, the overshoot above 1, and the largest error with
+/// `|t| ∈ [1/M, 1 − 1/M]` (ringing away from the step).
+fn step_stats(e: &Expansion) -> (f32, f32, f32, f32) {
+    let n = 20_000;
+    let ts: Vec<f32> = (0..=n).map(|i| -1.0 + 2.0 * i as f32 / n as f32).collect();
+    let g: Vec<f32> = ts.iter().map(|&t| e.step(t)).collect();
+    let l1 = ts
+        .iter()
+        .zip(&g)
+        .map(|(&t, &v)| (v - heaviside(t)).abs())
+        .sum::<f32>()
+        / ts.len() as f32;
+    let first = |level: f32| {
+        ts.iter()
+            .zip(&g)
+            .find(|(&t, &v)| t > -0.5 && v >= level)
+            .map(|(&t, _)| t)
+            .unwrap()
+    };
+    let width = first(0.9) - first(0.1);
+    let overshoot = g.iter().copied().fold(0.0f32, f32::max) - 1.0;
+    let m = e.m as f32;
+    let ring = ts
+        .iter()
+        .zip(&g)
+        .filter(|(&t, _)| t.abs() >= 1.0 / m && t.abs() <= 1.0 - 1.0 / m)
+        .map(|(&t, &v)| (v - heaviside(t)).abs())
+        .fold(0.0f32, f32::max);
+    (l1, width, overshoot, ring)
+}
+
+#[test]
+fn truncated_expansion_reconstructs_the_step_as_in_figure_3() {
+    let mut last_l1 = f32::INFINITY;
+    for m in [4u32, 8, 16] {
+        let plain = Expansion { m, alpha: 0.0 };
+        let (l1, width, overshoot, ring) = step_stats(&plain);
+        // Figure 3(a): the step steepens as 1/M, with the Gibbs overshoot of about 9%
+        // that does not shrink with M, and ringing that stays near 5% around the step.
+        assert!(width <= 0.46 / m as f32, "M={m}: transition width {width}");
+        assert!(
+            (0.08..=0.095).contains(&overshoot),
+            "M={m}: overshoot {overshoot}"
+        );
+        assert!(ring <= 0.056, "M={m}: ringing {ring}");
+        let bound = match m {
+            4 => 0.14,
+            8 => 0.08,
+            _ => 0.046,
+        };
+        assert!(l1 < last_l1 && l1 <= bound, "M={m}: mean error {l1}");
+        last_l1 = l1;
+        // Figure 3(b): attenuation suppresses the ringing and flattens the step.
+        let damped = Expansion { m, alpha: 1.0 };
+        let (_, dwidth, dovershoot, dring) = step_stats(&damped);
+        assert!(
+            dovershoot < overshoot * 0.25,
+            "M={m}: attenuated overshoot {dovershoot}"
+        );
+        assert!(dring < ring, "M={m}: attenuated ringing {dring} vs {ring}");
+        assert!(dwidth > width, "M={m}: attenuation must flatten the step");
+        // Figure 3(c): after the offset, a surface that is its own occluder is lit.
+        let e = Expansion { m, alpha: 0.5 };
+        let off = e.auto_offset();
+        assert!(
+            e.step(off) >= 1.0,
+            "M={m}: step at offset {off} is {}",
+            e.step(off)
+        );
+        assert!(
+            off <= 0.6 / m as f32,
+            "M={m}: offset {off} does not shrink with M"
+        );
+    }
+}
+
+/// A pseudo-random depth map in `[0, span]` (a small xorshift: deterministic, no crate).
+fn random_depths(w: u32, h: u32, span: f32) -> Vec<f32> {
+    let mut s = 0x9e37_79b9_u32;
+    (0..w * h)
+        .map(|_| {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            (s >> 8) as f32 / (1u32 << 24) as f32 * span
+        })
+        .collect()
+}
+
+fn blur_commutes_with_reconstruction<T: Channel>(tolerance: impl Fn(&Expansion) -> f32) {
+    let (w, h) = (48u32, 40u32);
+    let z = random_depths(w, h, 0.8);
+    for (m, n) in [(4u32, 3u32), (8, 5), (16, 7)] {
+        let e = Expansion { m, alpha: 0.5 };
+        let basis = Texture::<T>::from_fn(w, h, e.channels(), |x, y, o| {
+            e.basis(z[(y * w + x) as usize], o);
+            for v in o.iter_mut() {
+                *v = T::encode_signed(*v);
+            }
+        });
+        let blurred_basis = blur(&basis, n);
+        for d in [0.1f32, 0.45, 0.7] {
+            // The shadow test per texel for a receiver plane at depth d, then blurred.
+            let test = Texture::<f32>::from_fn(w, h, 1, |x, y, o| {
+                let b: Vec<f32> = basis
+                    .texel(x, y)
+                    .iter()
+                    .map(|v| T::decode_signed(v.to_f32()))
+                    .collect();
+                o[0] = e.reconstruct(d, &b);
+            });
+            let blurred_test = blur(&test, n);
+            let tol = tolerance(&e);
+            for y in 0..h {
+                for x in 0..w {
+                    let b: Vec<f32> = blurred_basis
+                        .texel(x, y)
+                        .iter()
+                        .map(|v| T::decode_signed(v.to_f32()))
+                        .collect();
+                    let a = e.reconstruct(d, &b);
+                    let r = blurred_test.texel(x, y)[0];
+                    assert!(
+                        (a - r).abs() <= tol,
+                        "M={m} blur {n} d={d} at ({x},{y}): {a} vs {r} (tolerance {tol})"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn blurring_the_basis_equals_blurring_the_shadow_test() {
+    // f32: equal up to rounding.
+    blur_commutes_with_reconstruction::<f32>(|_| 2e-5);
+    // 8-bit: the blurred basis is rounded twice more (two passes) than the basis the test
+    // was computed from, half a code (1/255 in [-1, 1]) each, on every channel.
+    blur_commutes_with_reconstruction::<u8>(|e| {
+        let per_channel = 2.0 * 0.5 / 127.5;
+        (1..=e.m)
+            .map(|k| 2.0 * e.attenuation(k) / Expansion::c(k) * 2.0 * per_channel)
+            .sum::<f32>()
+            + 1e-5
+    });
+}
+
+#[test]
+fn mip_level_selection_matches_the_footprint() {
+    // Level i of the chain holds the constant i, so a tri-linear sample returns λ itself.
+    let base = Texture::<f32>::from_fn(256, 256, 1, |_, _, o| o[0] = 0.0);
+    let mut chain = MipChain::build(base);
+    for (i, l) in chain.levels.iter_mut().enumerate() {
+        l.data.fill(i as f32);
+    }
+    let mut out = [0.0f32];
+    for texels in [0.5f32, 1.0, 2.0, 3.0, 8.0, 40.0, 128.0] {
+        let fp = Footprint {
+            dx: Vec2::new(texels / 256.0, 0.0),
+            dy: Vec2::new(0.0, texels * 0.5 / 256.0),
+        };
+        chain.sample(0.3, 0.6, &fp, Filter::Trilinear, 1, &mut out);
+        let want = texels.log2().max(0.0);
+        assert!(
+            (out[0] - want).abs() < 1e-4,
+            "footprint {texels} texels: level {} want {want}",
+            out[0]
+        );
+        // Anisotropic: two probes along the long axis, each with half the footprint.
+        let lod = chain.sample(0.3, 0.6, &fp, Filter::Anisotropic, 16, &mut out);
+        if texels > 1.0 {
+            assert_eq!(lod.probes, 2);
+            assert!((out[0] - (texels / 2.0).log2().max(0.0)).abs() < 1e-4);
+        }
+    }
+
+    // In a real frame: a ground plane under a light straight above, so map texels are
+    // squares on the ground; the footprint from the camera pass's derivatives must match
+    // the brute-force one, from the rays through the next pixel centres.
+    let scene = Scene::from_triangles(ground(30.0), Material::default()).unwrap();
+    let mut camera = Camera::look_at(vec3(0.0, 3.0, 12.0), vec3(0.0, 0.0, 2.0), 45.0, 160, 120);
+    camera.fit_depth_range(&scene.bounds);
+    let view = ViewSamples::render(&scene, &camera);
+    let lv = LightView::directional(Vec3::Y, &view.receiver_bounds(), &scene.bounds, 0.0);
+    let side = 1024;
+    let hit = |x: f32, y: f32| {
+        let d = camera.ray_direction(x, y);
+        let t = -camera.eye.y / d.y;
+        let p = camera.eye + d * t;
+        let s = lv.project(p);
+        Vec2::new(s.u, s.v)
+    };
+    let mut checked = 0;
+    for (px, py) in [(80u32, 40u32), (20, 60), (140, 90), (80, 110)] {
+        let k = (py * 160 + px) as usize;
+        assert!(view.covered(k));
+        let fp = light_footprint(&lv, view.position[k], view.dpdx[k], view.dpdy[k]);
+        let (cx, cy) = (px as f32 + 0.5, py as f32 + 0.5);
+        // The camera pass's derivatives are the steps to the next pixel's centre.
+        let brute = Footprint {
+            dx: hit(cx + 1.0, cy) - hit(cx, cy),
+            dy: hit(cx, cy + 1.0) - hit(cx, cy),
+        };
+        let a = level_of_detail(&fp, side, Filter::Trilinear, 1).lambda;
+        let b = level_of_detail(&brute, side, Filter::Trilinear, 1).lambda;
+        assert!(
+            (a - b).abs() < 0.02,
+            "pixel ({px},{py}): λ {a} vs brute force {b}"
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 4);
+}
+
+/// Thin bars (top faces only) at height `y`, `count` of them across `[-g, g]`, along z or x.
+fn bars(tris: &mut Vec<[Vec3; 3]>, g: f32, y: f32, count: u32, width: f32, along_x: bool) {
+    let pitch = 2.0 * g / count as f32;
+    for i in 0..count {
+        let a = -g + (i as f32 + 0.5) * pitch - width * 0.5;
+        let b = a + width;
+        let q = if along_x {
+            [vec3(-g, y, a), vec3(g, y, a), vec3(g, y, b), vec3(-g, y, b)]
+        } else {
+            [vec3(a, y, -g), vec3(a, y, g), vec3(b, y, g), vec3(b, y, -g)]
+        };
+        tris.push([q[0], q[1], q[2]]);
+        tris.push([q[0], q[2], q[3]]);
+    }
+}
+
+fn ground(g: f32) -> Vec<[Vec3; 3]> {
+    vec![
+        [vec3(-g, 0.0, -g), vec3(-g, 0.0, g), vec3(g, 0.0, g)],
+        [vec3(-g, 0.0, -g), vec3(g, 0.0, g), vec3(g, 0.0, -g)],
+    ]
+}
+
+struct Run {
+    mae: f64,
+    memory: u64,
+}
+
+/// Renders `technique` with `params` on `scene` and measures it against a 64-sample
+/// reference.
+fn measure(
+    scene: &Scene,
+    camera: &Camera,
+    light: &Light,
+    runs: &[(&str, &[(&str, &str)])],
+) -> Vec<Run> {
+    let view = ViewSamples::render(scene, camera);
+    let frame = Frame::new(scene, camera, light, &view);
+    let reference =
+        Reference::build(scene).visibility(&frame, &pattern(PatternKind::Grid, 64).unwrap());
+    runs.iter()
+        .map(|(name, params)| {
+            let mut t = techniques::create(name).unwrap();
+            for (k, v) in params.iter() {
+                t.set_param(k, v).unwrap();
+            }
+            let s = t.render(&frame).unwrap();
+            let m = compare(&view, &s.visibility, &reference);
+            eprintln!(
+                "{name} {params:?}: mean abs error {:.4}, mismatch {:.4}",
+                m.mean_abs_error, m.mismatch_rate
+            );
+            Run {
+                mae: m.mean_abs_error,
+                memory: s.stats.memory_bytes,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn csm_beats_pcf_on_minified_shadows() {
+    // A grating of thin bars over a ground plane seen from far away: each pixel covers
+    // many map texels and several bar shadows, which PCF's few taps alias and the
+    // mip-mapped basis averages.
+    let g = 10.0;
+    let mut tris = ground(g);
+    bars(&mut tris, g, 1.5, 64, 0.12, false);
+    let scene = Scene::from_triangles(tris, Material::default()).unwrap();
+    let mut camera = Camera::look_at(vec3(0.0, 8.0, 14.0), vec3(0.0, 0.0, -2.0), 45.0, 160, 120);
+    camera.scale_distance(2.5);
+    camera.fit_depth_range(&scene.bounds);
+    let light = Light::Directional {
+        to_light: vec3(0.15, 1.0, 0.1).normalize(),
+    };
+    let r = measure(
+        &scene,
+        &camera,
+        &light,
+        &[
+            ("pcf", &[]),
+            ("csm", &[]),
+            ("csm", &[("m", "16")]),
+            ("csm", &[("filter", "bilinear")]),
+        ],
+    );
+    assert!(
+        r[1].mae < r[0].mae * 0.7,
+        "csm M=4 {} vs pcf {}",
+        r[1].mae,
+        r[0].mae
+    );
+    assert!(
+        r[2].mae < r[0].mae * 0.7,
+        "csm M=16 {} vs pcf {}",
+        r[2].mae,
+        r[0].mae
+    );
+    // Without mip-mapping csm aliases like any point-sampled map.
+    assert!(
+        r[3].mae > r[1].mae,
+        "mip-mapping must help: {} vs {}",
+        r[3].mae,
+        r[1].mae
+    );
+}
+
+#[test]
+fn csm_leaks_less_than_vsm_under_depth_complexity() {
+    // Two gratings crossing at different heights over the ground: where a filter region
+    // holds both gratings' depths, Chebyshev's bound lets light through onto the ground
+    // (light bleeding); the Fourier expansion converges to the filtered test instead.
+    let g = 10.0;
+    let mut tris = ground(g);
+    bars(&mut tris, g, 2.0, 24, 0.3, false);
+    bars(&mut tris, g, 1.0, 16, 0.4, true);
+    let scene = Scene::from_triangles(tris, Material::default()).unwrap();
+    let mut camera = Camera::look_at(vec3(0.0, 9.0, 12.0), vec3(0.0, 0.0, -1.0), 45.0, 160, 120);
+    camera.fit_depth_range(&scene.bounds);
+    let light = Light::Directional {
+        to_light: vec3(0.2, 1.0, 0.15).normalize(),
+    };
+    let common: &[(&str, &str)] = &[("resolution", "512"), ("blur", "5")];
+    let r = measure(
+        &scene,
+        &camera,
+        &light,
+        &[
+            ("vsm", common),
+            ("csm", common),
+            ("csm", &[("resolution", "512"), ("blur", "5"), ("m", "16")]),
+        ],
+    );
+    assert!(
+        r[2].mae < r[0].mae,
+        "csm M=16 {} vs vsm {}",
+        r[2].mae,
+        r[0].mae
+    );
+    // The paper's memory comparison: at M = 4 the 8-bit basis takes as many bytes as a
+    // two-channel f32 variance map.
+    assert_eq!(r[1].memory, r[0].memory);
+    assert_eq!(r[2].memory, 4 * r[0].memory);
+}
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let g = 4.0;
+    let mut tris = ground(g);
+    bars(&mut tris, g, 1.0, 12, 0.2, false);
+    let scene = Scene::from_triangles(tris, Material::default()).unwrap();
+    let mut camera = Camera::look_at(vec3(0.0, 5.0, 8.0), Vec3::ZERO, 45.0, 96, 64);
+    camera.fit_depth_range(&scene.bounds);
+    let light = Light::Point {
+        position: vec3(0.5, 3.0, 0.3),
+    };
+    let view = ViewSamples::render(&scene, &camera);
+    let frame = Frame::new(&scene, &camera, &light, &view);
+    for name in ["csm", "vsm"] {
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut t = techniques::create(name).unwrap();
+                t.set_param("resolution", "256").unwrap();
+                t.set_param("blur", "3").unwrap();
+                t.render(&frame).unwrap().visibility
+            })
+        };
+        let one = run(1);
+        assert_eq!(one, run(3), "{name}");
+        // Some pixels are lit and some shadowed: the comparison is not vacuous.
+        assert!(
+            one.value.iter().any(|v| v.x > 0.9) && one.value.iter().any(|v| v.x < 0.1),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn bad_parameters_are_errors_that_name_them() {
+    let mut csm = techniques::create("csm").unwrap();
+    for (k, v) in [
+        ("m", "17"),
+        ("m", "0"),
+        ("blur", "4"),
+        ("blur", "x"),
+        ("filter", "cubic"),
+        ("precision", "u16"),
+        ("offset", "0.9"),
+        ("max-aniso", "32"),
+    ] {
+        let e = csm.set_param(k, v).unwrap_err().to_string();
+        assert!(e.contains(k), "{k}={v}: {e}");
+    }
+    let e = csm.set_param("kernel", "3").unwrap_err().to_string();
+    assert!(e.contains("kernel") && e.contains("alpha"), "{e}");
+    let mut vsm = techniques::create("vsm").unwrap();
+    assert!(vsm.set_param("bleed-reduction", "1.5").is_err());
+    for (k, v) in [
+        ("blur", "7x7"),
+        ("filter", "trilinear"),
+        ("bleed-reduction", "0.3"),
+    ] {
+        vsm.set_param(k, v).unwrap();
+    }
+    assert_eq!(vsm.params()["blur"], 7);
+    csm.set_param("offset", "auto").unwrap();
+    csm.set_param("precision", "f32").unwrap();
+    assert!(csm.params()["offset"].as_f64().unwrap() > 0.0);
+}
