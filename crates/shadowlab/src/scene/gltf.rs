@@ -1,8 +1,870 @@
-//! (being written)
-use super::Scene;
+//! glTF 2.0 files, `.gltf` (JSON with external or `data:` buffers) and `.glb` (binary),
+//! parsed and validated with the `gltf` crate; buffers are loaded and accessors decoded
+//! here, so that only geometry is ever read.
+//!
+//! What is read:
+//! - The default scene (or the first one; with no scene at all, every node that is no
+//!   other node's child), walked depth-first from its root nodes with each node's
+//!   transform (`matrix` or TRS) composed onto its parent's. A mesh used by several nodes
+//!   is decoded once and instanced with each node's world transform.
+//! - Primitives in `TRIANGLES`, `TRIANGLE_STRIP` and `TRIANGLE_FAN` mode, indexed or not,
+//!   with any component type the specification allows for positions (float, or
+//!   normalized/unnormalized integers as with `KHR_mesh_quantization`) and sparse
+//!   accessors. `POINTS` and `LINE*` primitives cast no shadow and are skipped, as are
+//!   primitives without `POSITION` (the specification says to skip them). Skins and morph
+//!   targets are ignored: the mesh is used in its bind pose.
+//! - Materials: the base colour factor gives the colour; alpha mode `BLEND` with alpha `a`
+//!   gives the transmittance `1 − a` in every channel; `MASK` and `OPAQUE` are opaque.
+//!   Textures are never loaded, so missing or undecodable images are not errors. A
+//!   primitive without a material gets [`Material::default`]. Material extensions
+//!   (`KHR_materials_transmission`, `…_volume`, …) are ignored.
+//! - The first camera node met in that walk: eye at the node's origin, looking down its −Z
+//!   with its +Y up. A perspective camera keeps `yfov`, `znear` and `zfar` (a missing
+//!   `zfar` — an infinite projection — is replaced by the far distance that fits the
+//!   scene); the image is 768 pixels high and as wide as `aspectRatio` says (1024 without
+//!   one). An orthographic camera has no exact equivalent here (every technique works with
+//!   the perspective [`Camera`]), so it becomes a narrow perspective camera
+//!   ([`ORTHOGRAPHIC_FOV_DEG`]) pulled back along its axis so that, at the depth of the
+//!   scene's centre, it frames exactly the orthographic rectangle `2·xmag × 2·ymag`; the
+//!   image aspect is `xmag / ymag`. The camera's target is placed on its axis at the depth
+//!   of the scene's centre, so moving it closer or farther keeps the scene in view.
+//! - The first node carrying a `KHR_lights_punctual` light: directional (shining down the
+//!   node's −Z), point (at its origin), or spot (at its origin, down its −Z, with
+//!   `fov_deg = 2 · outerConeAngle`, at most [`MAX_SPOT_FOV_DEG`]). Colour, intensity and
+//!   range do not matter for shadows and are ignored.
+//!
+//! Every failure is an [`Error`] naming the file and the element at fault: a buffer file
+//! that cannot be read (by its URI and resolved path), a buffer shorter than declared, an
+//! accessor reaching past its buffer view, an index out of range (mesh, primitive, index),
+//! a non-finite position (mesh, primitive, vertex), a hierarchy with a cycle.
+
+use super::{Material, Scene};
+use crate::camera::{Camera, MAX_IMAGE_SIDE};
 use crate::error::{Error, Result};
-use std::path::Path;
-/// Loads a file.
+use crate::light::Light;
+use crate::math::{vec3, Aabb, Mat4, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::json::validation::Checked;
+use gltf::mesh::Mode;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+/// Vertical field of view of the perspective camera that stands in for an orthographic
+/// one. Narrower is closer to orthographic but puts the eye farther away (a longer depth
+/// range, so coarser depth precision); 10° keeps the perspective distortion across the
+/// frame below 1% of the depth of the framed plane.
+pub const ORTHOGRAPHIC_FOV_DEG: f32 = 10.0;
+
+/// The widest spot cone accepted, in degrees. glTF allows an outer cone angle of up to 90°
+/// (a 180° cone), which no single perspective light view can hold; wider cones are
+/// narrowed to this.
+pub const MAX_SPOT_FOV_DEG: f32 = 178.0;
+
+/// Height in pixels of the image of a glTF camera; the width follows its aspect ratio.
+pub const CAMERA_HEIGHT: u32 = 768;
+
+/// Width of the image of a glTF camera that gives no aspect ratio.
+pub const CAMERA_DEFAULT_WIDTH: u32 = 1024;
+
+/// The most node visits of one hierarchy walk. A valid file visits each node once; a
+/// file that lists shared children many times over could otherwise multiply the walk.
+const MAX_NODE_VISITS: usize = 1 << 22;
+
+/// Loads a `.gltf` or `.glb` file.
 pub fn load(path: &Path) -> Result<Scene> {
-    Err(Error::format(path, "loader not written yet"))
+    let bytes = std::fs::read(path).map_err(|e| Error::Io {
+        path: path.into(),
+        source: e,
+    })?;
+    let fmt = |what: String| Error::format(path, what);
+    // The GLB reader subtracts the header size from the declared length unchecked.
+    if bytes.starts_with(b"glTF") {
+        let declared = bytes
+            .get(8..12)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        match declared {
+            Some(n) if n >= 20 => {}
+            _ => {
+                return Err(fmt(
+                    "the GLB header is truncated or declares an impossible length".into(),
+                ))
+            }
+        }
+    }
+    let gltf = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| fmt(describe(e)))?;
+    validate(gltf.document.as_json()).map_err(|e| fmt(describe(e)))?;
+    let gltf::Gltf { document, blob } = gltf;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffers = load_buffers(path, base, &document, blob)?;
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut loader = Loader {
+        path,
+        doc: &document,
+        buffers,
+        scene: Scene::new(name),
+        meshes: vec![None; document.meshes().len()],
+        materials: vec![None; document.materials().len()],
+        default_material: None,
+        camera: None,
+        light: None,
+    };
+    loader.walk()?;
+    let Loader {
+        mut scene,
+        camera,
+        light,
+        ..
+    } = loader;
+    if let Some((index, world)) = camera {
+        scene.camera = Some(convert_camera(
+            path,
+            &document,
+            index,
+            world,
+            &scene.bounds,
+        )?);
+    }
+    if let Some((index, world)) = light {
+        scene.light = Some(convert_light(path, &document, index, world)?);
+    }
+    Ok(scene)
+}
+
+/// One decoded primitive, in mesh space.
+struct Primitive {
+    positions: Vec<Vec3>,
+    tris: Vec<[u32; 3]>,
+    material: u32,
+}
+
+struct Loader<'a> {
+    path: &'a Path,
+    doc: &'a gltf::Document,
+    buffers: Vec<Vec<u8>>,
+    scene: Scene,
+    /// Decoded meshes by glTF index, shared by every node that instances them.
+    meshes: Vec<Option<Rc<Vec<Primitive>>>>,
+    /// Scene material index of each glTF material, once used.
+    materials: Vec<Option<u32>>,
+    default_material: Option<u32>,
+    /// First camera node: (camera index, world transform).
+    camera: Option<(usize, Mat4)>,
+    /// First light node: (light index, world transform).
+    light: Option<(usize, Mat4)>,
+}
+
+impl Loader<'_> {
+    fn err(&self, what: String) -> Error {
+        Error::format(self.path, what)
+    }
+
+    /// Walks the scene's hierarchy depth-first, in file order, adding each mesh instance.
+    fn walk(&mut self) -> Result<()> {
+        let doc = self.doc;
+        let roots: Vec<gltf::Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+            Some(s) => s.nodes().collect(),
+            None => {
+                let mut is_child = vec![false; doc.nodes().len()];
+                for n in doc.nodes() {
+                    for c in n.children() {
+                        is_child[c.index()] = true;
+                    }
+                }
+                doc.nodes().filter(|n| !is_child[n.index()]).collect()
+            }
+        };
+        let node_count = doc.nodes().len();
+        let mut stack: Vec<(gltf::Node, Mat4, usize)> = roots
+            .into_iter()
+            .rev()
+            .map(|n| (n, Mat4::IDENTITY, 0))
+            .collect();
+        let mut visits = 0usize;
+        while let Some((node, parent, depth)) = stack.pop() {
+            visits += 1;
+            if depth > node_count {
+                return Err(self.err(format!(
+                    "node {} is its own ancestor: the node hierarchy has a cycle",
+                    node.index()
+                )));
+            }
+            if visits > MAX_NODE_VISITS {
+                return Err(Error::Limit(format!(
+                    "{}: the node hierarchy needs more than {MAX_NODE_VISITS} node visits",
+                    self.path.display()
+                )));
+            }
+            let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+            if !local.is_finite() {
+                return Err(self.err(format!("node {} has a non-finite transform", node.index())));
+            }
+            let world = parent * local;
+            if self.camera.is_none() {
+                if let Some(c) = node.camera() {
+                    self.camera = Some((c.index(), world));
+                }
+            }
+            if self.light.is_none() {
+                if let Some(l) = node.light() {
+                    self.light = Some((l.index(), world));
+                }
+            }
+            if let Some(mesh) = node.mesh() {
+                let prims = self.mesh(&mesh)?;
+                for p in prims.iter() {
+                    if self.scene.len() + p.tris.len() > super::MAX_TRIANGLES {
+                        return Err(Error::Limit(format!(
+                            "{} holds more than {} triangles with its instances",
+                            self.path.display(),
+                            super::MAX_TRIANGLES
+                        )));
+                    }
+                    self.scene
+                        .push_indexed(&p.positions, &p.tris, world, p.material);
+                }
+            }
+            let children: Vec<gltf::Node> = node.children().collect();
+            for c in children.into_iter().rev() {
+                stack.push((c, world, depth + 1));
+            }
+        }
+        Ok(())
+    }
+
+    /// The decoded primitives of `mesh`, decoding them on first use.
+    fn mesh(&mut self, mesh: &gltf::Mesh) -> Result<Rc<Vec<Primitive>>> {
+        if let Some(m) = &self.meshes[mesh.index()] {
+            return Ok(m.clone());
+        }
+        let label = match mesh.name() {
+            Some(n) => format!("mesh {} ({n:?})", mesh.index()),
+            None => format!("mesh {}", mesh.index()),
+        };
+        let mut prims = Vec::new();
+        for prim in mesh.primitives() {
+            let at = format!("{label}, primitive {}", prim.index());
+            let mode = prim.mode();
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                continue;
+            }
+            let Some(pos) = prim.get(&gltf::Semantic::Positions) else {
+                continue;
+            };
+            if pos.dimensions() != Dimensions::Vec3 {
+                return Err(self.err(format!(
+                    "{at}: POSITION accessor {} is not VEC3",
+                    pos.index()
+                )));
+            }
+            let raw = self.read_accessor(&pos, &at)?;
+            let mut positions = Vec::with_capacity(raw.len() / 3);
+            for (v, c) in raw.chunks_exact(3).enumerate() {
+                let p = vec3(c[0] as f32, c[1] as f32, c[2] as f32);
+                if !p.is_finite() {
+                    return Err(self.err(format!(
+                        "{at}: vertex {v} has a non-finite position ({}, {}, {})",
+                        c[0], c[1], c[2]
+                    )));
+                }
+                positions.push(p);
+            }
+            let indices: Vec<u32> = match prim.indices() {
+                Some(acc) => {
+                    if acc.dimensions() != Dimensions::Scalar
+                        || !matches!(
+                            acc.data_type(),
+                            DataType::U8 | DataType::U16 | DataType::U32
+                        )
+                    {
+                        return Err(self.err(format!(
+                            "{at}: index accessor {} is not a scalar of unsigned integers",
+                            acc.index()
+                        )));
+                    }
+                    let raw = self.read_accessor(&acc, &at)?;
+                    let n = positions.len();
+                    let mut out = Vec::with_capacity(raw.len());
+                    for (k, &i) in raw.iter().enumerate() {
+                        if i >= n as f64 {
+                            return Err(self.err(format!(
+                                "{at}: index {k} (accessor {}) is {i}, out of range for the {n} vertices of POSITION",
+                                acc.index()
+                            )));
+                        }
+                        out.push(i as u32);
+                    }
+                    out
+                }
+                None => {
+                    if positions.len() > u32::MAX as usize {
+                        return Err(self.err(format!("{at}: too many vertices")));
+                    }
+                    (0..positions.len() as u32).collect()
+                }
+            };
+            let tris = match assemble(mode, &indices) {
+                Some(t) => t,
+                None => {
+                    return Err(self.err(format!(
+                        "{at}: {} indices do not make whole triangles (TRIANGLES needs a multiple of 3)",
+                        indices.len()
+                    )))
+                }
+            };
+            let material = self.material(prim.material())?;
+            prims.push(Primitive {
+                positions,
+                tris,
+                material,
+            });
+        }
+        let prims = Rc::new(prims);
+        self.meshes[mesh.index()] = Some(prims.clone());
+        Ok(prims)
+    }
+
+    /// The scene material for a glTF material, converting it on first use.
+    fn material(&mut self, m: gltf::Material) -> Result<u32> {
+        let Some(index) = m.index() else {
+            if let Some(d) = self.default_material {
+                return Ok(d);
+            }
+            let d = self.scene.add_material(Material::default());
+            self.default_material = Some(d);
+            return Ok(d);
+        };
+        if let Some(i) = self.materials[index] {
+            return Ok(i);
+        }
+        let [r, g, b, a] = m.pbr_metallic_roughness().base_color_factor();
+        let label = match m.name() {
+            Some(n) => format!("material {index} ({n:?})"),
+            None => format!("material {index}"),
+        };
+        if ![r, g, b, a].iter().all(|x| x.is_finite()) {
+            return Err(self.err(format!("{label}: the base colour factor is not finite")));
+        }
+        let transmittance = match m.alpha_mode() {
+            gltf::material::AlphaMode::Blend => Vec3::splat(1.0 - a.clamp(0.0, 1.0)),
+            gltf::material::AlphaMode::Mask | gltf::material::AlphaMode::Opaque => Vec3::ZERO,
+        };
+        let i = self.scene.add_material(Material {
+            name: m
+                .name()
+                .map(str::to_owned)
+                .unwrap_or_else(|| format!("material{index}")),
+            color: vec3(r, g, b).clamp(Vec3::ZERO, Vec3::ONE),
+            transmittance,
+        });
+        self.materials[index] = Some(i);
+        Ok(i)
+    }
+
+    /// Decodes every component of `acc` (sparse substitutions applied, integers normalized
+    /// where the accessor says so) in element order.
+    fn read_accessor(&self, acc: &gltf::Accessor, at: &str) -> Result<Vec<f64>> {
+        let ty = acc.data_type();
+        let n = acc.dimensions().multiplicity();
+        let count = acc.count();
+        let elem = ty.size() * n;
+        let what = format!("{at}: accessor {}", acc.index());
+        let total = count
+            .checked_mul(n)
+            .filter(|&t| t <= 3 * (super::MAX_TRIANGLES + 2))
+            .ok_or_else(|| {
+                Error::Limit(format!(
+                    "{}: {what} has too many elements ({count})",
+                    self.path.display()
+                ))
+            })?;
+        // The data is checked to be there before anything is allocated.
+        let dense = match acc.view() {
+            Some(view) => {
+                let stride = view.stride().unwrap_or(elem);
+                if stride < elem {
+                    return Err(self.err(format!(
+                        "{what}: buffer view {} has a stride of {stride} bytes, less than the {elem}-byte element",
+                        view.index()
+                    )));
+                }
+                let data = self.view_bytes(&view, &what)?;
+                let end = match count {
+                    0 => Some(0),
+                    _ => (count - 1)
+                        .checked_mul(stride)
+                        .and_then(|x| x.checked_add(acc.offset()))
+                        .and_then(|x| x.checked_add(elem)),
+                };
+                if end.is_none_or(|e| e > data.len()) {
+                    return Err(self.err(format!(
+                        "{what}: {count} elements from byte {} reach past the end of buffer view {} ({} bytes)",
+                        acc.offset(),
+                        view.index(),
+                        data.len()
+                    )));
+                }
+                Some((data, stride))
+            }
+            // No buffer view: zeros, to be replaced by sparse entries.
+            None => None,
+        };
+        let mut out = vec![0.0f64; total];
+        if let Some((data, stride)) = dense {
+            for i in 0..count {
+                let start = acc.offset() + i * stride;
+                decode(
+                    ty,
+                    acc.normalized(),
+                    &data[start..start + elem],
+                    &mut out[i * n..(i + 1) * n],
+                );
+            }
+        }
+        if let Some(sparse) = acc.sparse() {
+            let k = sparse.count();
+            let idx_view = sparse.indices().view();
+            let idx_data = self.view_bytes(&idx_view, &what)?;
+            let idx_size = match sparse.indices().index_type() {
+                gltf::accessor::sparse::IndexType::U8 => 1,
+                gltf::accessor::sparse::IndexType::U16 => 2,
+                gltf::accessor::sparse::IndexType::U32 => 4,
+            };
+            let val_view = sparse.values().view();
+            let val_data = self.view_bytes(&val_view, &what)?;
+            let idx_off = sparse.indices().offset();
+            let val_off = sparse.values().offset();
+            let fits = |off: usize, size: usize, len: usize| {
+                k.checked_mul(size)
+                    .and_then(|b| b.checked_add(off))
+                    .is_some_and(|e| e <= len)
+            };
+            if !fits(idx_off, idx_size, idx_data.len()) || !fits(val_off, elem, val_data.len()) {
+                return Err(self.err(format!(
+                    "{what}: its {k} sparse entries reach past the end of their buffer views"
+                )));
+            }
+            for j in 0..k {
+                let b = &idx_data[idx_off + j * idx_size..idx_off + (j + 1) * idx_size];
+                let target = match idx_size {
+                    1 => b[0] as usize,
+                    2 => u16::from_le_bytes([b[0], b[1]]) as usize,
+                    _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
+                };
+                if target >= count {
+                    return Err(self.err(format!(
+                        "{what}: sparse entry {j} replaces element {target}, but the accessor has {count}"
+                    )));
+                }
+                let v = &val_data[val_off + j * elem..val_off + (j + 1) * elem];
+                decode(
+                    ty,
+                    acc.normalized(),
+                    v,
+                    &mut out[target * n..(target + 1) * n],
+                );
+            }
+        }
+        Ok(out)
+    }
+
+    /// The bytes of a buffer view, checked against its buffer.
+    fn view_bytes(&self, view: &gltf::buffer::View, what: &str) -> Result<&[u8]> {
+        let buffer = &self.buffers[view.buffer().index()];
+        let end = view.offset().checked_add(view.length());
+        match end {
+            Some(end) if end <= buffer.len() => Ok(&buffer[view.offset()..end]),
+            _ => Err(self.err(format!(
+                "{what}: buffer view {} (bytes {}..+{}) reaches past the end of buffer {} ({} bytes)",
+                view.index(),
+                view.offset(),
+                view.length(),
+                view.buffer().index(),
+                buffer.len()
+            ))),
+        }
+    }
+}
+
+/// Decodes one element's components from little-endian bytes; normalized integers map to
+/// [0, 1] (unsigned) or [−1, 1] (signed) as the glTF specification defines.
+fn decode(ty: DataType, normalized: bool, bytes: &[u8], out: &mut [f64]) {
+    let size = ty.size();
+    for (c, o) in out.iter_mut().enumerate() {
+        let b = &bytes[c * size..(c + 1) * size];
+        *o = match ty {
+            DataType::I8 => {
+                let v = f64::from(b[0] as i8);
+                if normalized {
+                    (v / 127.0).max(-1.0)
+                } else {
+                    v
+                }
+            }
+            DataType::U8 => {
+                let v = f64::from(b[0]);
+                if normalized {
+                    v / 255.0
+                } else {
+                    v
+                }
+            }
+            DataType::I16 => {
+                let v = f64::from(i16::from_le_bytes([b[0], b[1]]));
+                if normalized {
+                    (v / 32767.0).max(-1.0)
+                } else {
+                    v
+                }
+            }
+            DataType::U16 => {
+                let v = f64::from(u16::from_le_bytes([b[0], b[1]]));
+                if normalized {
+                    v / 65535.0
+                } else {
+                    v
+                }
+            }
+            DataType::U32 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            DataType::F32 => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        };
+    }
+}
+
+/// Triangles from a primitive's vertex list: `None` when a `TRIANGLES` list is not a
+/// whole number of triangles. Strips alternate their winding so every triangle keeps the
+/// orientation of the first.
+fn assemble(mode: Mode, idx: &[u32]) -> Option<Vec<[u32; 3]>> {
+    let n = idx.len();
+    match mode {
+        Mode::Triangles => {
+            let chunks = idx.chunks_exact(3);
+            if !chunks.remainder().is_empty() {
+                return None;
+            }
+            Some(chunks.map(|c| [c[0], c[1], c[2]]).collect())
+        }
+        Mode::TriangleStrip => Some(
+            (0..n.saturating_sub(2))
+                .map(|i| {
+                    if i % 2 == 0 {
+                        [idx[i], idx[i + 1], idx[i + 2]]
+                    } else {
+                        [idx[i + 1], idx[i], idx[i + 2]]
+                    }
+                })
+                .collect(),
+        ),
+        Mode::TriangleFan => Some(
+            (1..n.saturating_sub(1))
+                .map(|i| [idx[0], idx[i], idx[i + 1]])
+                .collect(),
+        ),
+        _ => Some(Vec::new()),
+    }
+}
+
+/// Loads every buffer: the GLB binary chunk, `data:` URIs, or files beside the glTF file.
+fn load_buffers(
+    path: &Path,
+    base: &Path,
+    doc: &gltf::Document,
+    mut blob: Option<Vec<u8>>,
+) -> Result<Vec<Vec<u8>>> {
+    let fmt = |what: String| Error::format(path, what);
+    let mut out = Vec::new();
+    for buffer in doc.buffers() {
+        let i = buffer.index();
+        let (data, label) = match buffer.source() {
+            gltf::buffer::Source::Bin => {
+                let data = blob.take().ok_or_else(|| {
+                    fmt(format!(
+                        "buffer {i} refers to the GLB binary chunk, which the file lacks"
+                    ))
+                })?;
+                (data, "the GLB binary chunk".to_string())
+            }
+            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                let data =
+                    gltf::buffer::Data::from_source(buffer.source(), Some(base)).map_err(|e| {
+                        fmt(format!("buffer {i}: its data: URI cannot be decoded ({e})"))
+                    })?;
+                (data.0, "its data: URI".to_string())
+            }
+            gltf::buffer::Source::Uri(uri) => {
+                let file = resolve_uri(base, uri)
+                    .map_err(|why| fmt(format!("buffer {i} ({uri:?}): {why}")))?;
+                let data = std::fs::read(&file).map_err(|e| {
+                    fmt(format!(
+                        "buffer {i} refers to the file {uri:?} ({}), which cannot be read: {e}",
+                        file.display()
+                    ))
+                })?;
+                (data, format!("the file {uri:?}"))
+            }
+        };
+        if data.len() < buffer.length() {
+            return Err(fmt(format!(
+                "buffer {i} declares {} bytes but {label} holds only {}",
+                buffer.length(),
+                data.len()
+            )));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+/// The file a non-`data:` buffer URI names: a relative, percent-encoded reference
+/// resolved against the glTF file's folder, or a `file:` URI.
+fn resolve_uri(base: &Path, uri: &str) -> std::result::Result<PathBuf, String> {
+    if let Some(rest) = uri
+        .strip_prefix("file://")
+        .or_else(|| uri.strip_prefix("file:"))
+    {
+        return Ok(PathBuf::from(percent_decode(rest)?));
+    }
+    if uri.contains(':') {
+        return Err(
+            "the URI scheme is not supported (only relative paths, file: and data: are)".into(),
+        );
+    }
+    Ok(base.join(percent_decode(uri)?))
+}
+
+/// Decodes `%XX` escapes; a `%` not followed by two hex digits stays as it is.
+fn percent_decode(s: &str) -> std::result::Result<String, String> {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8(out).map_err(|_| "the URI decodes to a name that is not UTF-8".into())
+}
+
+/// The `gltf` crate's validation, less one rule: the `min`/`max` a `POSITION` accessor
+/// must carry. Many exporters omit them and the loader never reads them (it computes
+/// bounds itself), so their absence does not make a file unusable. Every other rule is
+/// kept: the crate's accessors rely on them.
+fn validate(root: &gltf::json::Root) -> std::result::Result<(), gltf::Error> {
+    use gltf::json::validation::{Error as Rule, Validate};
+    // The crate's own primitive check indexes the POSITION accessor before any bounds
+    // check, so out-of-range attribute accessors are caught here first.
+    for (mi, mesh) in root.meshes.iter().enumerate() {
+        for (pi, prim) in mesh.primitives.iter().enumerate() {
+            for acc in prim.attributes.values() {
+                if acc.value() >= root.accessors.len() {
+                    let path =
+                        gltf::json::Path(format!("meshes[{mi}].primitives[{pi}].attributes"));
+                    return Err(gltf::Error::Validation(vec![(
+                        path,
+                        Rule::IndexOutOfBounds,
+                    )]));
+                }
+            }
+        }
+    }
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| {
+        let path = path();
+        let p = path.as_str();
+        let bounds =
+            p.contains("attributes[\"POSITION\"]") && (p.ends_with(".min") || p.ends_with(".max"));
+        if !(bounds && matches!(error, Rule::Missing)) {
+            errors.push((path, error));
+        }
+    });
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(gltf::Error::Validation(errors))
+    }
+}
+
+/// One sentence for a parse or validation failure of the glTF crate.
+fn describe(e: gltf::Error) -> String {
+    match e {
+        gltf::Error::Validation(list) => {
+            let shown: Vec<String> = list
+                .iter()
+                .take(4)
+                .map(|(p, e)| format!("{p}: {e}"))
+                .collect();
+            let more = if list.len() > 4 {
+                format!(" (and {} more)", list.len() - 4)
+            } else {
+                String::new()
+            };
+            format!("not a valid glTF 2.0 file: {}{more}", shown.join("; "))
+        }
+        gltf::Error::Deserialize(e) => format!("not valid glTF JSON ({e})"),
+        gltf::Error::Binary(e) => format!("not a valid GLB container ({e})"),
+        other => format!("cannot be read as glTF ({other})"),
+    }
+}
+
+/// The scene camera for glTF camera `index` on a node with world transform `world`.
+fn convert_camera(
+    path: &Path,
+    doc: &gltf::Document,
+    index: usize,
+    world: Mat4,
+    bounds: &Aabb,
+) -> Result<Camera> {
+    let fmt = |what: String| Error::format(path, what);
+    let json = &doc.as_json().cameras[index];
+    let eye = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
+    if !eye.is_finite()
+        || forward == Vec3::ZERO
+        || up == Vec3::ZERO
+        || forward.cross(up).length_squared() < 1e-12
+    {
+        return Err(fmt(format!(
+            "camera {index}: its node's transform is degenerate"
+        )));
+    }
+    // The scene centre's depth along the view axis: where the target goes.
+    let center_depth = (bounds.center() - eye).dot(forward);
+    let image = |aspect: f32| -> Result<(u32, u32)> {
+        if !(aspect.is_finite() && aspect > 0.0) {
+            return Err(fmt(format!(
+                "camera {index}: aspect ratio {aspect} is not a positive number"
+            )));
+        }
+        let w = (CAMERA_HEIGHT as f32 * aspect).round();
+        if !(1.0..=MAX_IMAGE_SIDE as f32).contains(&w) {
+            return Err(fmt(format!(
+                "camera {index}: aspect ratio {aspect} gives an image {w} pixels wide, outside 1..={MAX_IMAGE_SIDE}"
+            )));
+        }
+        Ok((w as u32, CAMERA_HEIGHT))
+    };
+    let kind = match &json.type_ {
+        Checked::Valid(k) => *k,
+        Checked::Invalid => return Err(fmt(format!("camera {index}: unknown camera type"))),
+    };
+    let mut camera = match (kind, &json.perspective, &json.orthographic) {
+        (gltf::json::camera::Type::Perspective, Some(p), _) => {
+            let fov = p.yfov.to_degrees();
+            if !(fov > 0.0 && fov < 179.0) {
+                return Err(fmt(format!(
+                    "camera {index}: yfov {} rad is outside (0°, 179°)",
+                    p.yfov
+                )));
+            }
+            let (width, height) = match p.aspect_ratio {
+                Some(a) => image(a)?,
+                None => (CAMERA_DEFAULT_WIDTH, CAMERA_HEIGHT),
+            };
+            let dist = if center_depth > 0.0 {
+                center_depth
+            } else {
+                1.0
+            };
+            let mut c = Camera {
+                eye,
+                target: eye + forward * dist,
+                up,
+                fov_y_deg: fov,
+                near: 0.01,
+                far: 1000.0,
+                width,
+                height,
+            };
+            c.fit_depth_range(bounds);
+            if p.znear.is_finite() && p.znear > 0.0 {
+                c.near = p.znear;
+            }
+            if let Some(f) = p.zfar.filter(|f| f.is_finite() && *f > c.near) {
+                c.far = f;
+            }
+            c
+        }
+        (gltf::json::camera::Type::Orthographic, _, Some(o)) => {
+            let (xmag, ymag) = (o.xmag.abs(), o.ymag.abs());
+            if !(xmag.is_finite() && ymag.is_finite() && xmag > 0.0 && ymag > 0.0) {
+                return Err(fmt(format!(
+                    "camera {index}: orthographic xmag {} and ymag {} must be finite and non-zero",
+                    o.xmag, o.ymag
+                )));
+            }
+            let (width, height) = image(xmag / ymag)?;
+            let plane = center_depth.max(o.znear.max(0.0));
+            let half = (ORTHOGRAPHIC_FOV_DEG.to_radians() * 0.5).tan();
+            // Pull the eye back so the frustum's cross-section at `plane` is the
+            // orthographic rectangle.
+            let back = ymag / half;
+            let target = eye + forward * plane;
+            let mut c = Camera {
+                eye: target - forward * back,
+                target,
+                up,
+                fov_y_deg: ORTHOGRAPHIC_FOV_DEG,
+                near: 0.01,
+                far: 1000.0,
+                width,
+                height,
+            };
+            c.fit_depth_range(bounds);
+            c
+        }
+        _ => {
+            return Err(fmt(format!(
+            "camera {index}: its type's parameters (`perspective` or `orthographic`) are missing"
+        )))
+        }
+    };
+    camera.near = camera.near.max(camera.far * 1e-7);
+    camera
+        .validate()
+        .map_err(|e| fmt(format!("camera {index}: {e}")))?;
+    Ok(camera)
+}
+
+/// The scene light for `KHR_lights_punctual` light `index` on a node with world transform
+/// `world`.
+fn convert_light(path: &Path, doc: &gltf::Document, index: usize, world: Mat4) -> Result<Light> {
+    let fmt = |what: String| Error::format(path, what);
+    let light = doc
+        .lights()
+        .and_then(|mut l| l.nth(index))
+        .ok_or_else(|| fmt(format!("light {index} does not exist")))?;
+    let position = world.transform_point3(Vec3::ZERO);
+    let dir = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let out = match light.kind() {
+        gltf::khr_lights_punctual::Kind::Directional => Light::Directional { to_light: -dir },
+        gltf::khr_lights_punctual::Kind::Point => Light::Point { position },
+        gltf::khr_lights_punctual::Kind::Spot {
+            outer_cone_angle, ..
+        } => Light::Spot {
+            position,
+            target: position + dir,
+            fov_deg: (2.0 * outer_cone_angle).to_degrees().min(MAX_SPOT_FOV_DEG),
+        },
+    };
+    if matches!(out, Light::Directional { .. } | Light::Spot { .. }) && dir == Vec3::ZERO {
+        return Err(fmt(format!(
+            "light {index}: its node's transform is degenerate"
+        )));
+    }
+    out.validate()
+        .map_err(|e| fmt(format!("light {index}: {e}")))?;
+    Ok(out)
 }
