@@ -128,13 +128,23 @@ impl Camera {
 
     /// The (unnormalized) direction of the primary ray through image position `(x, y)` in
     /// pixels (pixel centres at `+0.5`). Its component along `forward` is 1, so the ray
-    /// parameter equals the view depth.
+    /// parameter equals the view depth. For many rays, [`Camera::rays`] avoids recomputing
+    /// the basis each time.
     pub fn ray_direction(&self, x: f32, y: f32) -> Vec3 {
+        self.rays().direction(x, y)
+    }
+
+    /// The camera's primary-ray generator.
+    pub fn rays(&self) -> RayGenerator {
         let (r, u, f) = self.basis();
         let th = (self.fov_y_deg.to_radians() * 0.5).tan();
-        let ndc_x = x / self.width as f32 * 2.0 - 1.0;
-        let ndc_y = 1.0 - y / self.height as f32 * 2.0;
-        f + r * (ndc_x * th * self.aspect()) + u * (ndc_y * th)
+        RayGenerator {
+            forward: f,
+            right: r * (th * self.aspect()),
+            up: u * th,
+            inv_width: 1.0 / self.width as f32,
+            inv_height: 1.0 / self.height as f32,
+        }
     }
 
     /// Sets near and far so the box `bounds` lies inside the depth range: far just beyond
@@ -158,6 +168,26 @@ impl Camera {
     /// Moves the camera along its view ray to `factor` times its distance from its target.
     pub fn scale_distance(&mut self, factor: f32) {
         self.eye = self.target + (self.eye - self.target) * factor;
+    }
+}
+
+/// Primary-ray directions of a camera, with its basis computed once.
+#[derive(Clone, Copy, Debug)]
+pub struct RayGenerator {
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    inv_width: f32,
+    inv_height: f32,
+}
+
+impl RayGenerator {
+    /// See [`Camera::ray_direction`].
+    #[inline]
+    pub fn direction(&self, x: f32, y: f32) -> Vec3 {
+        let ndc_x = x * self.inv_width * 2.0 - 1.0;
+        let ndc_y = 1.0 - y * self.inv_height * 2.0;
+        self.forward + self.right * ndc_x + self.up * ndc_y
     }
 }
 

@@ -19,10 +19,19 @@ use obvhs::ray::Ray;
 use rayon::prelude::*;
 use std::time::Instant;
 
+/// The size the scene is scaled to (by a power of two) for the BVH. `obvhs`'s node test
+/// starts every ray at `t = 1e-4` whatever the units, which skips casters that close to a
+/// shadow ray's origin (a whole scene at a scale of 1e-4); at this size the cut-off is far
+/// below the f32 resolution of the coordinates. Scaling by a power of two is exact, so the
+/// culling is otherwise that of the scene's own units.
+const BVH_EXTENT: f32 = 1048576.0;
+
 /// A BVH over a scene's triangles, ready to trace.
 pub struct Reference<'s> {
     scene: &'s Scene,
     bvh: CwBvh,
+    /// The power of two the BVH's coordinates are the scene's times (see [`BVH_EXTENT`]).
+    bvh_scale: f32,
     /// BVH build time in milliseconds.
     pub build_ms: f64,
 }
@@ -42,9 +51,15 @@ impl<'s> Reference<'s> {
     /// Builds the BVH over every triangle of `scene`.
     pub fn build(scene: &'s Scene) -> Self {
         let t0 = Instant::now();
+        let diagonal = scene.bounds.diagonal();
+        let bvh_scale = if diagonal > 0.0 && diagonal.is_finite() {
+            2f32.powi(((BVH_EXTENT / diagonal).log2().floor() as i32).clamp(-100, 100))
+        } else {
+            1.0
+        };
         let tris: Vec<obvhs::triangle::Triangle> = (0..scene.len())
             .map(|i| {
-                let t = scene.triangle(i);
+                let t = scene.triangle(i).map(|p| p * bvh_scale);
                 obvhs::triangle::Triangle {
                     v0: t[0].into(),
                     v1: t[1].into(),
@@ -60,6 +75,7 @@ impl<'s> Reference<'s> {
         Reference {
             scene,
             bvh,
+            bvh_scale,
             build_ms: t0.elapsed().as_secs_f64() * 1e3,
         }
     }
@@ -85,7 +101,8 @@ impl<'s> Reference<'s> {
     /// Transmittance along the segment `o + t·dir`, `t ∈ (0, t_max)`, skipping triangle `own`.
     pub fn occlusion(&self, o: Vec3, dir: Vec3, t_max: f32, own: u32) -> Vec3 {
         let scene = self.scene;
-        let ray = Ray::new(Vec3A::from(o), Vec3A::from(dir), 0.0, t_max);
+        let s = self.bvh_scale;
+        let ray = Ray::new(Vec3A::from(o * s), Vec3A::from(dir), 0.0, t_max * s);
         let prim = &self.bvh.primitive_indices;
         if !scene.has_transparency() {
             let miss = self.bvh.ray_traverse_miss(ray, |_, id| {
@@ -94,7 +111,7 @@ impl<'s> Reference<'s> {
                     return f32::INFINITY;
                 }
                 intersect_triangle(o, dir, 0.0, t_max, scene.triangle(tri as usize))
-                    .map_or(f32::INFINITY, |h| h.t)
+                    .map_or(f32::INFINITY, |h| h.t * s)
             });
             return if miss { Vec3::ONE } else { Vec3::ZERO };
         }
@@ -122,7 +139,8 @@ impl<'s> Reference<'s> {
     /// The closest triangle along `o + t·dir` for `t > 0`; ties go to the lower index.
     pub fn closest_hit(&self, o: Vec3, dir: Vec3) -> Option<PrimaryHit> {
         let scene = self.scene;
-        let ray = Ray::new_inf(Vec3A::from(o), Vec3A::from(dir));
+        let s = self.bvh_scale;
+        let ray = Ray::new_inf(Vec3A::from(o * s), Vec3A::from(dir));
         let prim = &self.bvh.primitive_indices;
         let mut best: Option<(f32, u32, [f32; 3])> = None;
         self.bvh.ray_traverse(ray, &mut obvhs::ray::RayHit::none(), |_, id| {
@@ -138,7 +156,7 @@ impl<'s> Reference<'s> {
                     }
                     // Keep the traversal interval open at the current best so equal-t
                     // candidates are still visited for the tie-break.
-                    best.map_or(f32::INFINITY, |b| b.0.next_up())
+                    best.map_or(f32::INFINITY, |b| b.0.next_up() * s)
                 }
                 None => f32::INFINITY,
             }
@@ -156,7 +174,8 @@ impl<'s> Reference<'s> {
     /// surface (pixels whose sub-samples all miss keep the centre sample's value).
     pub fn visibility(&self, frame: &Frame, samples: &[Vec2]) -> Visibility {
         let view = frame.view;
-        let cam = frame.camera;
+        let rays = frame.camera.rays();
+        let eye = frame.camera.eye;
         let light = frame.light;
         let (w, h) = (view.width, view.height);
         let rows: Vec<Vec<Vec3>> = (0..h)
@@ -175,8 +194,8 @@ impl<'s> Reference<'s> {
                         let mut sum = Vec3::ZERO;
                         let mut count = 0u32;
                         for s in samples {
-                            let d = cam.ray_direction(x as f32 + s.x, y as f32 + s.y);
-                            if let Some(hit) = self.closest_hit(cam.eye, d) {
+                            let d = rays.direction(x as f32 + s.x, y as f32 + s.y);
+                            if let Some(hit) = self.closest_hit(eye, d) {
                                 let v = self.scene.triangle(hit.triangle as usize);
                                 let mut n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
                                 if n.dot(d) > 0.0 {

@@ -69,6 +69,7 @@ impl ViewSamples {
         };
         let eye = camera.eye;
         let fwd = camera.forward();
+        let rays = camera.rays();
         let triangle = &vs.triangle;
         let rows: Vec<_> = (0..h)
             .into_par_iter()
@@ -83,7 +84,7 @@ impl ViewSamples {
                     let v = scene.triangle(id as usize);
                     let cx = x as f32 + 0.5;
                     let cy = y as f32 + 0.5;
-                    let d = camera.ray_direction(cx, cy);
+                    let d = rays.direction(cx, cy);
                     let Some(hit) = intersect_plane(eye, d, v) else {
                         row.push(None);
                         continue;
@@ -93,11 +94,16 @@ impl ViewSamples {
                     if n.dot(d) > 0.0 {
                         n = -n;
                     }
+                    // Neighbouring centre rays meet the same plane at t = n·(p − eye) / n·dir.
+                    let plane = n.dot(sp.p - eye);
                     let at = |dx: f32, dy: f32| {
-                        intersect_plane(eye, camera.ray_direction(cx + dx, cy + dy), v)
-                            .filter(|hh| hh.t > 0.0 && hh.t.is_finite())
-                            .map(|hh| eye + camera.ray_direction(cx + dx, cy + dy) * hh.t - sp.p)
-                            .unwrap_or(Vec3::ZERO)
+                        let dir = rays.direction(cx + dx, cy + dy);
+                        let t = plane / n.dot(dir);
+                        if t > 0.0 && t.is_finite() {
+                            eye + dir * t - sp.p
+                        } else {
+                            Vec3::ZERO
+                        }
                     };
                     row.push(Some((sp, n, (sp.p - eye).dot(fwd), at(1.0, 0.0), at(0.0, 1.0))));
                 }
