@@ -13,6 +13,10 @@ use serde::{Deserialize, Serialize};
 /// allocation. Raise it with care: a frame's buffers grow with the pixel count.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 
+/// The most pixels an image may have (8192²): the camera pass holds about 70 bytes a
+/// pixel, so this caps a frame's buffers near 5 GB.
+pub const MAX_PIXELS: u64 = 1 << 26;
+
 /// A perspective pinhole camera.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Camera {
@@ -65,6 +69,12 @@ impl Camera {
         if self.width > MAX_IMAGE_SIDE || self.height > MAX_IMAGE_SIDE {
             return Err(Error::Limit(format!(
                 "image size {}x{} exceeds the limit of {MAX_IMAGE_SIDE} pixels a side",
+                self.width, self.height
+            )));
+        }
+        if self.width as u64 * self.height as u64 > MAX_PIXELS {
+            return Err(Error::Limit(format!(
+                "image size {}x{} has more than the limit of {MAX_PIXELS} pixels; lower --width or --height",
                 self.width, self.height
             )));
         }

@@ -81,6 +81,35 @@ pub fn check_resolution(technique: &str, res: u32) -> Result<u32> {
     Ok(res)
 }
 
+/// Bytes the light-space maps of one render may take together (a depth and a triangle id,
+/// 8 bytes a texel), refused above this before anything is allocated: one 16384² map or a
+/// cube of six 8192² faces fits, while a 32768² map (8 GiB) or a cube of 16384² faces
+/// (12 GiB) would exhaust the memory of most machines.
+pub const MAX_LIGHT_MAP_BYTES: u64 = 4 << 30;
+
+/// Refuses `views` light maps of `res²` texels whose depth and id buffers would exceed
+/// [`MAX_LIGHT_MAP_BYTES`], naming the technique's resolution and the limit.
+pub fn check_light_map_size(technique: &str, views: usize, res: u32) -> Result<()> {
+    let bytes = views as u64 * (res as u64).pow(2) * 8;
+    if bytes > MAX_LIGHT_MAP_BYTES {
+        return Err(Error::Limit(format!(
+            "{technique}.resolution = {res}: {views} light map(s) of {res}² texels would take {} MiB, more than the limit of {} MiB; set a smaller --param resolution",
+            bytes >> 20,
+            MAX_LIGHT_MAP_BYTES >> 20
+        )));
+    }
+    Ok(())
+}
+
+/// Number of light views [`render_light_maps`] renders for `light`: six for a point light's
+/// cube, one otherwise.
+pub fn light_view_count(light: &Light) -> usize {
+    match light {
+        Light::Point { .. } => 6,
+        _ => 1,
+    }
+}
+
 /// Rasterizes `scene` into a `res × res` linear-depth map of `view`.
 pub fn render_depth_map(scene: &Scene, view: &LightView, res: u32) -> DepthBuffer {
     let m = view.clip_from_world;
@@ -234,6 +263,7 @@ impl ShadowTechnique for ShadowMap {
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
         let mut stats = Stats::default();
         let res = check_resolution(self.name, self.resolution)?;
+        check_light_map_size(self.name, light_view_count(frame.light), res)?;
         let maps = stats.stage("shadow_map", || render_light_maps(frame, res));
         let view = frame.view;
         let (w, h) = (view.width, view.height);
