@@ -373,6 +373,24 @@ pub struct Footprint {
 /// projections of `p ± dpdx` and `p ± dpdy`. Non-finite projections (behind a perspective
 /// eye) give a zero derivative.
 pub fn light_footprint(view: &LightView, p: Vec3, dpdx: Vec3, dpdy: Vec3) -> Footprint {
+    if view.orthographic {
+        // The projection is affine: the difference is the linear part applied to the step
+        // (one matrix-vector product per axis instead of four projections).
+        let m = &view.clip_from_world;
+        let lin = |d: Vec3| {
+            let c = m.transform_vector3(d);
+            let g = Vec2::new(0.5 * c.x, -0.5 * c.y);
+            if g.is_finite() {
+                g
+            } else {
+                Vec2::ZERO
+            }
+        };
+        return Footprint {
+            dx: lin(dpdx),
+            dy: lin(dpdy),
+        };
+    }
     let uv = |q: Vec3| {
         let s = view.project(q);
         Vec2::new(s.u, s.v)
@@ -791,6 +809,65 @@ impl DepthRange {
         DepthRange { near, far, span }
     }
 
+    /// The depth interval that matters to the receivers this frame shades: from the nearest
+    /// map texel inside the receivers' light-space footprint (widened by `pad` texels for
+    /// the filters' support) to the farthest receiver. Normalizing with clamping is monotone,
+    /// so the shadow test `z < d` of every visible receiver keeps its sign: a texel nearer
+    /// than `near` lies outside the footprint and stays in front, one farther than `far`
+    /// lies behind every receiver and stays behind. The tighter interval is what the
+    /// convolution shadow map paper asks of the light frustum ("tightly fitted"): it shrinks
+    /// the offset and the smooth step's half-width in world units. Falls back to
+    /// [`Self::of_map`] when the view shades no receiver.
+    pub fn fitted(
+        map: &DepthBuffer,
+        view: &LightView,
+        receivers: &ReceiverFootprint,
+        pad: u32,
+        span: f32,
+    ) -> Self {
+        if receivers.count == 0 || map.width == 0 || map.height == 0 {
+            return Self::of_map(map, view, span);
+        }
+        let texel = |t: f32, n: u32, round_up: bool| -> u32 {
+            let f = t.clamp(0.0, 1.0) * n as f32;
+            let i = if round_up {
+                f.ceil() as i64 + pad as i64
+            } else {
+                f.floor() as i64 - pad as i64
+            };
+            i.clamp(0, n as i64) as u32
+        };
+        let (x0, x1) = (
+            texel(receivers.u.0, map.width, false),
+            texel(receivers.u.1, map.width, true),
+        );
+        let (y0, y1) = (
+            texel(receivers.v.0, map.height, false),
+            texel(receivers.v.1, map.height, true),
+        );
+        let mut near = f32::INFINITY;
+        for y in y0..y1 {
+            let row = &map.depth[(y * map.width) as usize..((y + 1) * map.width) as usize];
+            for &d in &row[x0 as usize..x1 as usize] {
+                if d.is_finite() {
+                    near = near.min(d);
+                }
+            }
+        }
+        let far = receivers.far;
+        if !near.is_finite() || !far.is_finite() || near > far {
+            return Self::of_map(map, view, span);
+        }
+        // A sliver of slack on both sides so the nearest occluder and the farthest receiver
+        // are not both clamped onto the ends.
+        let slack = (far - near) * FITTED_RANGE_SLACK;
+        let (near, mut far) = (near - slack, far + slack);
+        if far - near <= f32::EPSILON * far.abs().max(1.0) {
+            far = near + f32::EPSILON * far.abs().max(1.0) * 16.0;
+        }
+        DepthRange { near, far, span }
+    }
+
     /// `depth` mapped to `[0, span]`, clamped; empty texels (`+inf`) map to `span`.
     #[inline]
     pub fn normalize(&self, depth: f32) -> f32 {
@@ -798,6 +875,84 @@ impl DepthRange {
             return self.span;
         }
         ((depth - self.near) / (self.far - self.near)).clamp(0.0, 1.0) * self.span
+    }
+}
+
+/// Fraction of the fitted depth interval added on each side (see [`DepthRange::fitted`]):
+/// keeps the extreme depths off the clamped ends at the cost of 1% of the precision.
+pub const FITTED_RANGE_SLACK: f32 = 0.005;
+
+/// Where the receivers a light view shades fall in it: the bounds of their map coordinates
+/// and their farthest light depth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReceiverFootprint {
+    /// Smallest and largest `u`.
+    pub u: (f32, f32),
+    /// Smallest and largest `v`.
+    pub v: (f32, f32),
+    /// Farthest linear light depth.
+    pub far: f32,
+    /// Number of receivers.
+    pub count: u64,
+}
+
+impl ReceiverFootprint {
+    const EMPTY: ReceiverFootprint = ReceiverFootprint {
+        u: (f32::INFINITY, f32::NEG_INFINITY),
+        v: (f32::INFINITY, f32::NEG_INFINITY),
+        far: f32::NEG_INFINITY,
+        count: 0,
+    };
+
+    fn add(mut self, u: f32, v: f32, depth: f32) -> Self {
+        if u.is_finite() && v.is_finite() && depth.is_finite() {
+            self.u = (self.u.0.min(u), self.u.1.max(u));
+            self.v = (self.v.0.min(v), self.v.1.max(v));
+            self.far = self.far.max(depth);
+            self.count += 1;
+        }
+        self
+    }
+
+    fn merge(self, o: Self) -> Self {
+        ReceiverFootprint {
+            u: (self.u.0.min(o.u.0), self.u.1.max(o.u.1)),
+            v: (self.v.0.min(o.v.0), self.v.1.max(o.v.1)),
+            far: self.far.max(o.far),
+            count: self.count + o.count,
+        }
+    }
+
+    /// The footprint in each of `views` of the pixels of `frame` the light reaches (the
+    /// point light's cube faces each get the pixels whose direction selects them). Minima
+    /// and maxima are exact in any order, so the result does not depend on the thread count.
+    pub fn of_frame(frame: &Frame, views: &[LightView]) -> Vec<Self> {
+        let n = views.len();
+        let view = frame.view;
+        (0..view.position.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .fold(
+                || vec![Self::EMPTY; n],
+                |mut acc, k| {
+                    if frame.receiver_lit(k) {
+                        let p = view.position[k];
+                        let i = match *frame.light {
+                            Light::Point { position } => cube_face(p - position),
+                            _ => 0,
+                        };
+                        if let Some(lv) = views.get(i) {
+                            let s = lv.project(p);
+                            acc[i] = acc[i].add(s.u, s.v, s.depth);
+                        }
+                    }
+                    acc
+                },
+            )
+            .reduce(
+                || vec![Self::EMPTY; n],
+                |a, b| a.into_iter().zip(b).map(|(x, y)| x.merge(y)).collect(),
+            )
     }
 }
 
@@ -831,11 +986,16 @@ impl<T: Channel> FilteredMaps<T> {
         encode: impl Fn(&DepthBuffer, &DepthRange, u32, u32, &mut [f32]) + Sync,
     ) -> Self {
         let maps = stats.stage("shadow_map", || render_light_maps(frame, res));
+        let footprints = ReceiverFootprint::of_frame(frame, &maps.views);
+        // The filters read up to the blur radius (plus the bilinear neighbour) beyond the
+        // footprint at level 0.
+        let pad = settings.blur / 2 + 1;
         let ranges: Vec<DepthRange> = maps
             .maps
             .iter()
             .zip(&maps.views)
-            .map(|(m, v)| DepthRange::of_map(m, v, span))
+            .zip(&footprints)
+            .map(|((m, v), f)| DepthRange::fitted(m, v, f, pad, span))
             .collect();
         let encoded: Vec<Texture<T>> = stats.stage("encode", || {
             maps.maps

@@ -6,8 +6,8 @@
 //! filtered mean μ and variance σ² = E[z²] − μ² and bounds the lit fraction of a receiver at
 //! depth `d > μ` with the one-tailed Chebyshev inequality `p_max = σ² / (σ² + (d − μ)²)`.
 //!
-//! Invariants: moments are of the linear light depth normalized over the depth interval
-//! the map holds (`[0, 1]`), stored as f32; blur, mip chain and look-ups are the shared ones
+//! Invariants: moments are of the linear light depth normalized (to `[0, 1]`) over the
+//! same fitted interval as `csm`'s (`DepthRange::fitted`), stored as f32; blur, mip chain and look-ups are the shared ones
 //! of [`super::filtering`], the same as `csm`'s; `d ≤ μ` is fully lit.
 //!
 //! As in the paper, the second moment of each texel gets the variance of the depth across
