@@ -342,7 +342,17 @@ impl ShadowTechnique for Perspective {
                 stats,
             });
         };
-        let mut setup = stats.stage("body", || build_setup(frame, &receivers, res))?;
+        let Some(mut setup) = stats.stage("body", || build_setup(frame, &receivers, res))? else {
+            // No post-space map fits this frame: fall back to a uniform shadow map with the
+            // same resolution and bias rather than fail the frame.
+            let mut sm = super::shadow_map::ShadowMap::standard();
+            sm.resolution = res;
+            sm.bias = self.bias;
+            sm.slope_bias = self.slope_bias;
+            let mut out = sm.render(frame)?;
+            out.stats.count("uniform_fallback", 1.0);
+            return Ok(out);
+        };
         super::shadow_map::check_light_map_size("psm", setup.maps.len(), res)?;
         stats.stage("shadow_map", || {
             let pieces = clipped_pieces(frame, &setup);
@@ -386,13 +396,14 @@ impl ShadowTechnique for Perspective {
 
 impl Perspective {
     /// The post-perspective space this technique would build for `frame` (the body, the
-    /// virtual shift and the light's case), without rendering a map.
+    /// virtual shift and the light's case), without rendering a map; `None` when no receiver
+    /// can be lit or no post-space map fits (the technique then falls back to a uniform map).
     pub fn post_space(&self, frame: &Frame) -> Result<Option<PostSpace>> {
         let res = check_resolution("psm", self.resolution)?;
         frame.light.validate()?;
         match Receivers::gather(frame) {
             None => Ok(None),
-            Some(r) => Ok(Some(build_setup(frame, &r, res)?.post)),
+            Some(r) => Ok(build_setup(frame, &r, res)?.map(|s| s.post)),
         }
     }
 }
@@ -720,7 +731,10 @@ fn from_rows(r: [DVec4; 4]) -> DMat4 {
     DMat4::from_cols(r[0], r[1], r[2], r[3]).transpose()
 }
 
-fn build_setup(frame: &Frame, rec: &Receivers, res: u32) -> Result<Setup> {
+/// Builds the post-perspective set-up; `None` when no post-space map can be fitted around
+/// the body (degenerate bodies, e.g. every lit receiver in a sliver the post-space light
+/// sees edge-on).
+fn build_setup(frame: &Frame, rec: &Receivers, res: u32) -> Result<Option<Setup>> {
     let cam = frame.camera;
     let scene = &frame.scene.bounds;
     let scale = scene
@@ -853,9 +867,7 @@ fn build_setup(frame: &Frame, rec: &Receivers, res: u32) -> Result<Setup> {
         (kind, q, DVec3::ZERO)
     };
     if maps.is_empty() {
-        return Err(Error::param(
-            "psm: the light sees none of the visible receivers from post-perspective space",
-        ));
+        return Ok(None);
     }
     let post_from_world_f = post_from_world.as_mat4();
     let maps: Vec<PostMap> = maps
@@ -872,7 +884,7 @@ fn build_setup(frame: &Frame, rec: &Receivers, res: u32) -> Result<Setup> {
         body,
         maps: maps.len(),
     };
-    Ok(Setup {
+    Ok(Some(Setup {
         post,
         q: q.as_vec3(),
         dir: dir.as_vec3(),
@@ -881,7 +893,7 @@ fn build_setup(frame: &Frame, rec: &Receivers, res: u32) -> Result<Setup> {
         clip_depth: (near * CLIP_DEPTH_FRACTION as f64) as f32,
         maps,
         cube,
-    })
+    }))
 }
 
 /// The six planes of a box, pushed out by `pad`.
