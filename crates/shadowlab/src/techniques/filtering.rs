@@ -803,10 +803,15 @@ impl DepthRange {
         if near > far {
             (near, far) = (view.near, view.far);
         }
-        if far - near <= f32::EPSILON * far.abs().max(1.0) {
-            far = near + f32::EPSILON * far.abs().max(1.0) * 16.0;
-        }
+        let far = far.max(near + Self::min_width(near, far));
         DepthRange { near, far, span }
+    }
+
+    /// The narrowest interval `[near, far]` may be: [`MIN_RANGE_RELATIVE`] of the larger
+    /// depth magnitude (a tiny absolute floor for depths near zero).
+    #[inline]
+    fn min_width(near: f32, far: f32) -> f32 {
+        MIN_RANGE_RELATIVE * near.abs().max(far.abs()).max(f32::MIN_POSITIVE.sqrt())
     }
 
     /// The depth interval that matters to the receivers this frame shades: from the nearest
@@ -816,8 +821,10 @@ impl DepthRange {
     /// than `near` lies outside the footprint and stays in front, one farther than `far`
     /// lies behind every receiver and stays behind. The tighter interval is what the
     /// convolution shadow map paper asks of the light frustum ("tightly fitted"): it shrinks
-    /// the offset and the smooth step's half-width in world units. Falls back to
-    /// [`Self::of_map`] when the view shades no receiver.
+    /// the offset and the smooth step's half-width in world units. It is never narrower
+    /// than [`MIN_RANGE_RELATIVE`] of the depths, so receivers at a single light depth (a
+    /// point light's cube face looking straight down at a floor) are not normalized by their
+    /// rounding error. Falls back to [`Self::of_map`] when the view shades no receiver.
     pub fn fitted(
         map: &DepthBuffer,
         view: &LightView,
@@ -858,14 +865,18 @@ impl DepthRange {
         if !near.is_finite() || !far.is_finite() || near > far {
             return Self::of_map(map, view, span);
         }
+        // Receivers that all lie at one light depth (a plane facing the light head-on) give
+        // an interval as thin as the depths' rounding; widen it towards the light so that
+        // rounding stays far below the filters' offsets and transition widths.
+        let near = near.min(far - Self::min_width(near, far));
         // A sliver of slack on both sides so the nearest occluder and the farthest receiver
         // are not both clamped onto the ends.
         let slack = (far - near) * FITTED_RANGE_SLACK;
-        let (near, mut far) = (near - slack, far + slack);
-        if far - near <= f32::EPSILON * far.abs().max(1.0) {
-            far = near + f32::EPSILON * far.abs().max(1.0) * 16.0;
+        DepthRange {
+            near: near - slack,
+            far: far + slack,
+            span,
         }
-        DepthRange { near, far, span }
     }
 
     /// `depth` mapped to `[0, span]`, clamped; empty texels (`+inf`) map to `span`.
@@ -877,6 +888,14 @@ impl DepthRange {
         ((depth - self.near) / (self.far - self.near)).clamp(0.0, 1.0) * self.span
     }
 }
+
+/// Narrowest depth interval a map is normalized over, as a fraction of the depths' magnitude
+/// (see [`DepthRange::fitted`]). Rasterized and projected depths of the same point differ by
+/// a few units in the last place (about 10⁻⁷ relative); normalized over an interval that
+/// thin, that rounding fills the whole `[0, span]` and flat receivers shadow themselves. At
+/// 10⁻³ the rounding is 10⁻⁴ of the interval, far below `csm`'s offset and `vsm`'s variance
+/// floor, while receivers a thousandth of their light distance apart still separate.
+pub const MIN_RANGE_RELATIVE: f32 = 1e-3;
 
 /// Fraction of the fitted depth interval added on each side (see [`DepthRange::fitted`]):
 /// keeps the extreme depths off the clamped ends at the cost of 1% of the precision.
