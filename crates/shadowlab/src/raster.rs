@@ -215,11 +215,12 @@ fn push_triangle(id: u32, mut t: [([i64; 2], f32, f32); 3], width: u32, height: 
         area = -area;
     }
     let v = [t[0].0, t[1].0, t[2].0];
-    // Edge k is opposite vertex k: from v[k+1] to v[k+2]. With positive area in y-down
-    // coordinates, an edge owns the pixel centres exactly on it when it is a "top" edge
-    // (horizontal, pointing right... in this orientation, dy == 0 and dx < 0) or a "left"
-    // edge (dy > 0). Reversing an edge flips the answer, so exactly one of the two
-    // triangles sharing an edge owns each point on it.
+    // Edge k is opposite vertex k: from v[k+1] to v[k+2]. A pixel centre exactly on an
+    // edge belongs to the triangle only when the edge is an "owner" edge: pointing down
+    // (dy > 0), or horizontal and pointing left. With positive area in y-down screen
+    // coordinates these are the left and top edges — the top-left rule. Reversing an edge
+    // flips the answer, so of two triangles sharing an edge exactly one owns each point on
+    // it: no cracks and no double hits.
     let mut bias = [0i64; 3];
     for k in 0..3 {
         let a = v[(k + 1) % 3];
