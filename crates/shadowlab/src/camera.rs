@@ -85,6 +85,9 @@ impl Camera {
         if (self.target - self.eye).length_squared() == 0.0 {
             return Err(Error::param("camera eye and target are the same point"));
         }
+        if !self.forward().is_finite() {
+            return Err(Error::param("camera target is too far from its eye to form a view direction"));
+        }
         if self.forward().cross(self.up).length_squared() < 1e-12 {
             return Err(Error::param("camera up direction is parallel to the view direction"));
         }

@@ -38,7 +38,8 @@ impl Light {
     pub fn validate(&self) -> Result<()> {
         match *self {
             Light::Directional { to_light } => {
-                if !to_light.is_finite() || to_light.length_squared() < 1e-12 {
+                let len2 = to_light.length_squared();
+                if !to_light.is_finite() || !len2.is_finite() || len2 < 1e-12 {
                     return Err(Error::param(
                         "directional light direction must be a finite, non-zero vector",
                     ));
@@ -52,8 +53,12 @@ impl Light {
                 if !position.is_finite() || !target.is_finite() {
                     return Err(Error::param("spot light position and target must be finite"));
                 }
-                if (target - position).length_squared() == 0.0 {
+                let len2 = (target - position).length_squared();
+                if len2 == 0.0 {
                     return Err(Error::param("spot light target equals its position"));
+                }
+                if !len2.is_finite() {
+                    return Err(Error::param("spot light target is too far from its position to form a direction"));
                 }
                 if !(fov_deg > 0.0 && fov_deg < 179.0) {
                     return Err(Error::param(format!(
