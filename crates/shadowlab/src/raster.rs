@@ -454,17 +454,18 @@ mod tests {
 
     fn tessellated_quad(rng: &mut Lcg, n: usize) -> Vec<[Vec3; 3]> {
         // A grid of jittered vertices over [-1,1]², split into triangles along random
-        // diagonals; the outer boundary stays the square.
+        // diagonals; the outer boundary stays the square. The jitter (±10% of the spacing)
+        // keeps every cell convex, so no triangle folds over a neighbour.
         let mut pts = vec![Vec3::ZERO; (n + 1) * (n + 1)];
         for j in 0..=n {
             for i in 0..=n {
                 let mut x = i as f32 / n as f32 * 2.0 - 1.0;
                 let mut y = j as f32 / n as f32 * 2.0 - 1.0;
                 if i > 0 && i < n {
-                    x += (rng.next() - 0.5) * 1.6 / n as f32;
+                    x += (rng.next() - 0.5) * 0.4 / n as f32;
                 }
                 if j > 0 && j < n {
-                    y += (rng.next() - 0.5) * 1.6 / n as f32;
+                    y += (rng.next() - 0.5) * 0.4 / n as f32;
                 }
                 pts[j * (n + 1) + i] = vec3(x, y, 0.0);
             }
