@@ -81,6 +81,11 @@ pub fn chebyshev(d: f32, mean: f32, second: f32, min_variance: f32, reduction: f
     if d <= mean {
         return 1.0;
     }
+    if !(mean.is_finite() && second.is_finite() && d.is_finite()) {
+        // Moments that are not finite carry no occlusion information (seen on degenerate
+        // frames found by fuzzing); never let them turn into a NaN shadow term.
+        return 1.0;
+    }
     let var = (second - mean * mean).max(min_variance);
     let t = d - mean;
     let p = var / (var + t * t);
