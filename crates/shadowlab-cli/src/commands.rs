@@ -111,7 +111,11 @@ pub fn provenance(camera: &Camera, light: &Light) -> (Value, Value) {
     let l = match *light {
         Light::Directional { to_light } => json!({"kind": "directional", "to_light": v(to_light)}),
         Light::Point { position } => json!({"kind": "point", "position": v(position)}),
-        Light::Spot { position, target, fov_deg } => {
+        Light::Spot {
+            position,
+            target,
+            fov_deg,
+        } => {
             json!({"kind": "spot", "position": v(position), "target": v(target), "fov_deg": fov_deg})
         }
     };
@@ -121,7 +125,12 @@ pub fn provenance(camera: &Camera, light: &Light) -> (Value, Value) {
 fn stats_json(s: &Shadows, time_ms: f64) -> serde_json::Map<String, Value> {
     let mut m = serde_json::Map::new();
     m.insert("time_ms".into(), json!(time_ms));
-    let stages: serde_json::Map<String, Value> = s.stats.stages_ms.iter().map(|(k, v)| (k.clone(), json!(v))).collect();
+    let stages: serde_json::Map<String, Value> = s
+        .stats
+        .stages_ms
+        .iter()
+        .map(|(k, v)| (k.clone(), json!(v)))
+        .collect();
     m.insert("stages_ms".into(), Value::Object(stages));
     m.insert("memory_bytes".into(), json!(s.stats.memory_bytes));
     m.insert("counters".into(), json!(s.stats.counters));
@@ -173,14 +182,20 @@ fn run_frame(run: &mut Run, frame: &Frame) -> Result<()> {
         .render(frame)
         .with_context(|| format!("technique {}", run.label))?;
     let ms = t0.elapsed().as_secs_f64() * 1e3;
-    run.frames.push(json!({"frame": frame.index, "time_ms": ms, "memory_bytes": s.stats.memory_bytes}));
+    run.frames
+        .push(json!({"frame": frame.index, "time_ms": ms, "memory_bytes": s.stats.memory_bytes}));
     run.last = Some((s, ms));
     Ok(())
 }
 
 /// `shadowlab render`.
 pub fn render(a: &RenderArgs) -> Result<()> {
-    for (p, flag) in [(Some(&a.output), "--output"), (a.visibility.as_ref(), "--visibility"), (a.stats.as_ref(), "--stats"), (a.export_scene.as_ref(), "--export-scene")] {
+    for (p, flag) in [
+        (Some(&a.output), "--output"),
+        (a.visibility.as_ref(), "--visibility"),
+        (a.stats.as_ref(), "--stats"),
+        (a.export_scene.as_ref(), "--export-scene"),
+    ] {
         if let Some(p) = p {
             check_new_file(p, a.force, flag)?;
         }
@@ -198,7 +213,8 @@ pub fn render(a: &RenderArgs) -> Result<()> {
         frames: Vec::new(),
     };
     if let Some(d) = &a.dump {
-        std::fs::create_dir_all(d).with_context(|| format!("cannot create --dump folder {}", d.display()))?;
+        std::fs::create_dir_all(d)
+            .with_context(|| format!("cannot create --dump folder {}", d.display()))?;
     }
     let bar = progress::bar(setup.frames as u64, format!("rendering {}", a.technique));
     let mut last = None;
@@ -218,7 +234,12 @@ pub fn render(a: &RenderArgs) -> Result<()> {
         frame.dump_dir = a.dump.as_deref();
         run_frame(&mut run, &frame)?;
         if a.scene.frames > 1 {
-            let img = shade::shade(&setup.scene, &view, &setup.light, &run.last.as_ref().unwrap().0.visibility);
+            let img = shade::shade(
+                &setup.scene,
+                &view,
+                &setup.light,
+                &run.last.as_ref().unwrap().0.visibility,
+            );
             let stem = a.output.with_extension("");
             shade::save_png(&img, Path::new(&format!("{}-{i:04}.png", stem.display())))?;
             if let Some(anim) = animation.as_mut() {
@@ -249,7 +270,10 @@ pub fn render(a: &RenderArgs) -> Result<()> {
     st.insert("params".into(), json!(run.technique.params()));
     st.insert("scene".into(), json!(setup.scene.name));
     st.insert("scene_source".into(), json!(a.scene.scene));
-    st.insert("scene_params".into(), json!(parse_kvs(&a.scene.scene_params, "--scene-param")?));
+    st.insert(
+        "scene_params".into(),
+        json!(parse_kvs(&a.scene.scene_params, "--scene-param")?),
+    );
     st.insert("triangles".into(), json!(setup.scene.len()));
     st.insert("shadowlab_version".into(), json!(env!("CARGO_PKG_VERSION")));
     st.insert("camera".into(), cam_json);
@@ -264,7 +288,13 @@ pub fn render(a: &RenderArgs) -> Result<()> {
     }
     pb.finish_and_clear();
     if !progress::quiet() {
-        eprintln!("{}: {} in {:.1} ms, wrote {}", setup.scene.name, run.label, time_ms, a.output.display());
+        eprintln!(
+            "{}: {} in {:.1} ms, wrote {}",
+            setup.scene.name,
+            run.label,
+            time_ms,
+            a.output.display()
+        );
     }
     Ok(())
 }
@@ -280,7 +310,11 @@ fn plan_runs(a: &CompareArgs) -> Result<Vec<(String, String, Vec<(String, String
     let names: Vec<String> = if a.techniques.trim() == "all" {
         techniques::ALL.iter().map(|s| s.to_string()).collect()
     } else {
-        a.techniques.split(',').map(|s| s.trim().to_string()).filter(|s| !s.is_empty()).collect()
+        a.techniques
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect()
     };
     if names.is_empty() {
         bail!("--techniques {:?} names no technique", a.techniques);
@@ -288,7 +322,10 @@ fn plan_runs(a: &CompareArgs) -> Result<Vec<(String, String, Vec<(String, String
     let params = parse_prefixed_params(&a.params)?;
     for t in params.keys() {
         if !names.contains(t) {
-            bail!("--param names technique {t}, which is not among --techniques {}", names.join(","));
+            bail!(
+                "--param names technique {t}, which is not among --techniques {}",
+                names.join(",")
+            );
         }
     }
     let mut sweeps: Vec<(String, String, Vec<String>)> = Vec::new();
@@ -299,7 +336,11 @@ fn plan_runs(a: &CompareArgs) -> Result<Vec<(String, String, Vec<(String, String
         let Some((t, k)) = tk.split_once('.') else {
             bail!("--sweep {s:?} must name its technique: TECHNIQUE.KEY=V1,V2,...");
         };
-        let vals: Vec<String> = vals.split(',').map(|v| v.trim().to_string()).filter(|v| !v.is_empty()).collect();
+        let vals: Vec<String> = vals
+            .split(',')
+            .map(|v| v.trim().to_string())
+            .filter(|v| !v.is_empty())
+            .collect();
         if vals.is_empty() {
             bail!("--sweep {s:?} lists no values");
         }
@@ -323,7 +364,10 @@ fn plan_runs(a: &CompareArgs) -> Result<Vec<(String, String, Vec<(String, String
     }
     for (t, _, _) in &sweeps {
         if !names.contains(t) {
-            bail!("--sweep names technique {t}, which is not among --techniques {}", names.join(","));
+            bail!(
+                "--sweep names technique {t}, which is not among --techniques {}",
+                names.join(",")
+            );
         }
     }
     Ok(runs)
@@ -334,7 +378,11 @@ fn plan_runs(a: &CompareArgs) -> Result<Vec<(String, String, Vec<(String, String
 fn prepare_out(dir: &Path, force: bool) -> Result<()> {
     if dir.exists() {
         if !dir.is_dir() {
-            return Err(BadInput(format!("--out {} exists and is not a folder", dir.display())).into());
+            return Err(BadInput(format!(
+                "--out {} exists and is not a folder",
+                dir.display()
+            ))
+            .into());
         }
         let non_empty = std::fs::read_dir(dir)?.next().is_some();
         let is_report = dir.join("metrics.json").is_file();
@@ -352,7 +400,15 @@ fn prepare_out(dir: &Path, force: bool) -> Result<()> {
 
 /// File-name-safe form of a run label.
 pub fn slug(s: &str) -> String {
-    s.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 /// `shadowlab compare` (and `shadowlab` with no arguments).
@@ -381,9 +437,12 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     let mut animations = Vec::new();
     if setup.frames > 1 {
         let fdir = a.out.join("frames");
-        std::fs::create_dir_all(&fdir).with_context(|| format!("cannot create {}", fdir.display()))?;
+        std::fs::create_dir_all(&fdir)
+            .with_context(|| format!("cannot create {}", fdir.display()))?;
         for run in &runs {
-            animations.push(report::Animation::create(&a.out.join(format!("{}.gif", slug(&run.label))))?);
+            animations.push(report::Animation::create(
+                &a.out.join(format!("{}.gif", slug(&run.label))),
+            )?);
         }
     }
     let bar = progress::bar((setup.frames * runs.len()) as u64, "techniques");
@@ -400,7 +459,11 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             if let Some(anim) = animations.get_mut(r) {
                 let (s, _) = run.last.as_ref().expect("just rendered");
                 let img = shade::shade(&setup.scene, &view, &setup.light, &s.visibility);
-                shade::save_png(&img, &a.out.join(format!("frames/{}-{i:04}.png", slug(&run.label))))?;
+                shade::save_png(
+                    &img,
+                    &a.out
+                        .join(format!("frames/{}-{i:04}.png", slug(&run.label))),
+                )?;
                 anim.push(&img)?;
             }
             bar.inc(1);
@@ -450,13 +513,25 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             r.insert("frames".into(), json!(run.frames));
             r.insert("animation".into(), json!(format!("{file}.gif")));
         }
-        if let Some((k, v)) = run.label.strip_prefix(&format!("{}.", run.technique.name())).and_then(|kv| kv.split_once('=')) {
+        if let Some((k, v)) = run
+            .label
+            .strip_prefix(&format!("{}.", run.technique.name()))
+            .and_then(|kv| kv.split_once('='))
+        {
             r.insert("sweep".into(), json!({"key": k, "value": v}));
         }
-        r.insert("worst_region".into(), match report::worst_region(&view, &s.visibility, &ref_vis) {
-            Some(region) => region.to_json(&report::write_crop(&a.out, &file, &region, &[&ref_img, &shaded, &error_img])?),
-            None => Value::Null,
-        });
+        r.insert(
+            "worst_region".into(),
+            match report::worst_region(&view, &s.visibility, &ref_vis) {
+                Some(region) => region.to_json(&report::write_crop(
+                    &a.out,
+                    &file,
+                    &region,
+                    &[&ref_img, &shaded, &error_img],
+                )?),
+                None => Value::Null,
+            },
+        );
         rows.push((run.label.clone(), *ms, m));
         results.push(Value::Object(r));
         bar.inc(1);
@@ -501,9 +576,18 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             bvh_ms,
             ref_ms - bvh_ms
         );
-        println!("{:<28} {:>10} {:>10} {:>10}", "technique", "time ms", "mismatch", "mean err");
+        println!(
+            "{:<28} {:>10} {:>10} {:>10}",
+            "technique", "time ms", "mismatch", "mean err"
+        );
         for (label, ms, m) in &rows {
-            println!("{:<28} {:>10.2} {:>9.4}% {:>10.5}", label, ms, m.mismatch_rate * 100.0, m.mean_abs_error);
+            println!(
+                "{:<28} {:>10.2} {:>9.4}% {:>10.5}",
+                label,
+                ms,
+                m.mismatch_rate * 100.0,
+                m.mean_abs_error
+            );
         }
         println!("report: {}", a.out.join("index.html").display());
     }

@@ -28,7 +28,11 @@ pub struct SceneArgs {
     #[arg(long, value_name = "EYE:TARGET[:FOV]")]
     pub camera: Option<String>,
     /// Move the camera along its view ray to F times its distance from its target.
-    #[arg(long = "camera-distance", value_name = "F", allow_negative_numbers = true)]
+    #[arg(
+        long = "camera-distance",
+        value_name = "F",
+        allow_negative_numbers = true
+    )]
     pub camera_distance: Option<f32>,
     /// Light override: `directional:DX,DY,DZ`, `point:X,Y,Z` or `spot:X,Y,Z:TX,TY,TZ:FOV_DEG`.
     #[arg(long)]
@@ -100,9 +104,14 @@ pub fn parse_light(s: &str) -> Result<Light> {
         ["spot", p, t, f] => Light::Spot {
             position: parse_vec3(p, "--light position")?,
             target: parse_vec3(t, "--light target")?,
-            fov_deg: f.trim().parse().with_context(|| format!("--light cone angle {f:?} is not a number"))?,
+            fov_deg: f
+                .trim()
+                .parse()
+                .with_context(|| format!("--light cone angle {f:?} is not a number"))?,
         },
-        _ => bail!("--light {s:?} is not directional:DX,DY,DZ, point:X,Y,Z or spot:X,Y,Z:TX,TY,TZ:FOV_DEG"),
+        _ => bail!(
+            "--light {s:?} is not directional:DX,DY,DZ, point:X,Y,Z or spot:X,Y,Z:TX,TY,TZ:FOV_DEG"
+        ),
     };
     light.validate().context("--light")?;
     Ok(light.normalized())
@@ -135,10 +144,22 @@ impl SceneArgs {
             camera.eye = parse_vec3(parts[0], "--camera eye")?;
             camera.target = parse_vec3(parts[1], "--camera target")?;
             if let Some(f) = parts.get(2) {
-                camera.fov_y_deg = f.trim().parse().with_context(|| format!("--camera field of view {f:?} is not a number"))?;
+                camera.fov_y_deg = f
+                    .trim()
+                    .parse()
+                    .with_context(|| format!("--camera field of view {f:?} is not a number"))?;
             }
-            if (camera.target - camera.eye).normalize_or_zero().cross(camera.up).length_squared() < 1e-8 {
-                camera.up = if camera.up == Vec3::Y { Vec3::Z } else { Vec3::Y };
+            if (camera.target - camera.eye)
+                .normalize_or_zero()
+                .cross(camera.up)
+                .length_squared()
+                < 1e-8
+            {
+                camera.up = if camera.up == Vec3::Y {
+                    Vec3::Z
+                } else {
+                    Vec3::Y
+                };
             }
         }
         if let Some(f) = self.camera_distance {
@@ -174,7 +195,9 @@ pub fn parse_prefixed_params(items: &[String]) -> Result<BTreeMap<String, Vec<(S
         let Some((t, key)) = k.split_once('.') else {
             bail!("--param {s:?} in compare must name its technique: TECHNIQUE.KEY=VALUE, e.g. sm.resolution=4096");
         };
-        out.entry(t.to_string()).or_default().push((key.to_string(), v));
+        out.entry(t.to_string())
+            .or_default()
+            .push((key.to_string(), v));
     }
     Ok(out)
 }

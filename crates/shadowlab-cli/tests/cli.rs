@@ -24,11 +24,23 @@ fn tmp(name: &str) -> PathBuf {
 /// `needle`, and no panic.
 fn assert_bad_input(out: &Output, needle: &str) {
     let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "expected exit 2, got {:?}; stderr: {err}", out.status.code());
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "expected exit 2, got {:?}; stderr: {err}",
+        out.status.code()
+    );
     assert!(!err.contains("panicked"), "panic: {err}");
-    assert_eq!(err.trim().lines().count(), 1, "expected one sentence, got: {err}");
+    assert_eq!(
+        err.trim().lines().count(),
+        1,
+        "expected one sentence, got: {err}"
+    );
     assert!(err.starts_with("error:"), "{err}");
-    assert!(err.to_lowercase().contains(&needle.to_lowercase()), "{err:?} does not mention {needle:?}");
+    assert!(
+        err.to_lowercase().contains(&needle.to_lowercase()),
+        "{err:?} does not mention {needle:?}"
+    );
 }
 
 fn render(dir: &Path, args: &[&str]) -> Output {
@@ -48,19 +60,86 @@ fn bad_flags_and_parameters_exit_with_2_and_one_sentence() {
     let b = bunny.to_str().unwrap();
     let cases: &[(&[&str], &str)] = &[
         (&["--scene", b, "--technique", "nope"], "unknown technique"),
-        (&["--scene", b, "--technique", "sm", "--param", "colour=3"], "resolution"),
-        (&["--scene", b, "--technique", "sm", "--param", "resolution=0"], "resolution"),
-        (&["--scene", b, "--technique", "sm", "--param", "resolution=1000000"], "resolution"),
-        (&["--scene", b, "--technique", "sm", "--param", "resolution=abc"], "resolution"),
-        (&["--scene", b, "--technique", "sm", "--width", "0"], "width"),
-        (&["--scene", b, "--technique", "sm", "--width", "100000"], "limit"),
-        (&["--scene", b, "--technique", "sm", "--light", "sideways:1,2,3"], "--light"),
-        (&["--scene", b, "--technique", "sm", "--light", "directional:0,0,0"], "direction"),
-        (&["--scene", b, "--technique", "sm", "--camera", "1,2:3"], "--camera"),
-        (&["--scene", b, "--technique", "sm", "--camera-distance", "-1"], "--camera-distance"),
-        (&["--scene", b, "--technique", "sm", "--frames", "0"], "--frames"),
-        (&["--scene", "/nonexistent/mesh.obj", "--technique", "sm"], "mesh.obj"),
-        (&["--scene", "no-such-scene", "--technique", "sm"], "no-such-scene"),
+        (
+            &["--scene", b, "--technique", "sm", "--param", "colour=3"],
+            "resolution",
+        ),
+        (
+            &["--scene", b, "--technique", "sm", "--param", "resolution=0"],
+            "resolution",
+        ),
+        (
+            &[
+                "--scene",
+                b,
+                "--technique",
+                "sm",
+                "--param",
+                "resolution=1000000",
+            ],
+            "resolution",
+        ),
+        (
+            &[
+                "--scene",
+                b,
+                "--technique",
+                "sm",
+                "--param",
+                "resolution=abc",
+            ],
+            "resolution",
+        ),
+        (
+            &["--scene", b, "--technique", "sm", "--width", "0"],
+            "width",
+        ),
+        (
+            &["--scene", b, "--technique", "sm", "--width", "100000"],
+            "limit",
+        ),
+        (
+            &[
+                "--scene",
+                b,
+                "--technique",
+                "sm",
+                "--light",
+                "sideways:1,2,3",
+            ],
+            "--light",
+        ),
+        (
+            &[
+                "--scene",
+                b,
+                "--technique",
+                "sm",
+                "--light",
+                "directional:0,0,0",
+            ],
+            "direction",
+        ),
+        (
+            &["--scene", b, "--technique", "sm", "--camera", "1,2:3"],
+            "--camera",
+        ),
+        (
+            &["--scene", b, "--technique", "sm", "--camera-distance", "-1"],
+            "--camera-distance",
+        ),
+        (
+            &["--scene", b, "--technique", "sm", "--frames", "0"],
+            "--frames",
+        ),
+        (
+            &["--scene", "/nonexistent/mesh.obj", "--technique", "sm"],
+            "mesh.obj",
+        ),
+        (
+            &["--scene", "no-such-scene", "--technique", "sm"],
+            "no-such-scene",
+        ),
     ];
     for (args, needle) in cases {
         let out = render(&d, args);
@@ -80,7 +159,10 @@ fn malformed_meshes_exit_with_2_naming_the_file() {
     let inf = write("inf.obj", "v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n");
     let empty = write("empty.obj", "# nothing here\n");
     let range = write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
-    let ply = write("trunc.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n");
+    let ply = write(
+        "trunc.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n",
+    );
     let toml = write("bad.toml", "[camera]\neye = [0, 0, 5]\nwobble = 3\n");
     for p in [&nan, &inf, &empty, &range, &ply, &toml] {
         let out = render(&d, &["--scene", p.to_str().unwrap(), "--technique", "sm"]);
@@ -106,7 +188,20 @@ fn files_in_the_bad_folder_never_panic() {
     }
     assert!(files.len() >= 4);
     for f in files {
-        let out = render(&d, &["--scene", f.to_str().unwrap(), "--technique", "sm", "--width", "64", "--height", "48", "--force"]);
+        let out = render(
+            &d,
+            &[
+                "--scene",
+                f.to_str().unwrap(),
+                "--technique",
+                "sm",
+                "--width",
+                "64",
+                "--height",
+                "48",
+                "--force",
+            ],
+        );
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!err.contains("panicked"), "{}: {err}", f.display());
         match out.status.code() {
@@ -137,10 +232,15 @@ fn render_writes_image_visibility_and_stats_and_refuses_to_overwrite() {
         stats.to_str().unwrap(),
     ];
     let out = render(&d, &args);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let png = image::open(d.join("out.png")).unwrap();
     assert_eq!((png.width(), png.height()), (96, 72));
-    let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("stats.json")).unwrap()).unwrap();
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("stats.json")).unwrap()).unwrap();
     assert_eq!(stats["technique"], "pcf");
     assert_eq!(stats["params"]["kernel"], 3);
     assert_eq!(stats["camera"]["width"], 96);
@@ -157,7 +257,17 @@ fn compare_writes_metrics_and_refuses_foreign_folders() {
     let out_dir = d.join("report");
     let run = |extra: &[&str]| {
         bin()
-            .args(["compare", "--scene", bunny.to_str().unwrap(), "--techniques", "sm,pcf", "--width", "96", "--height", "72"])
+            .args([
+                "compare",
+                "--scene",
+                bunny.to_str().unwrap(),
+                "--techniques",
+                "sm,pcf",
+                "--width",
+                "96",
+                "--height",
+                "72",
+            ])
             .args(["--sweep", "sm.resolution=256,1024"])
             .arg("--out")
             .arg(&out_dir)
@@ -166,13 +276,28 @@ fn compare_writes_metrics_and_refuses_foreign_folders() {
             .unwrap()
     };
     let out = run(&[]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let m: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out_dir.join("metrics.json")).unwrap()).unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("metrics.json")).unwrap())
+            .unwrap();
     assert_eq!(m["width"], 96);
     let results = m["results"].as_array().unwrap();
     assert_eq!(results.len(), 3, "two sweep values of sm and one pcf");
     for r in results {
-        for key in ["technique", "params", "time_ms", "stages_ms", "memory_bytes", "mismatch_rate", "mean_abs_error", "counters"] {
+        for key in [
+            "technique",
+            "params",
+            "time_ms",
+            "stages_ms",
+            "memory_bytes",
+            "mismatch_rate",
+            "mean_abs_error",
+            "counters",
+        ] {
             assert!(!r[key].is_null(), "result lacks {key}: {r}");
         }
         assert!(out_dir.join(r["image"].as_str().unwrap()).is_file());
@@ -185,10 +310,24 @@ fn compare_writes_metrics_and_refuses_foreign_folders() {
     std::fs::create_dir_all(&foreign).unwrap();
     std::fs::write(foreign.join("thesis.tex"), "precious").unwrap();
     let out = bin()
-        .args(["compare", "--scene", bunny.to_str().unwrap(), "--techniques", "sm", "--width", "32", "--height", "24", "--out"])
+        .args([
+            "compare",
+            "--scene",
+            bunny.to_str().unwrap(),
+            "--techniques",
+            "sm",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--out",
+        ])
         .arg(&foreign)
         .output()
         .unwrap();
     assert_bad_input(&out, "--force");
-    assert_eq!(std::fs::read_to_string(foreign.join("thesis.tex")).unwrap(), "precious");
+    assert_eq!(
+        std::fs::read_to_string(foreign.join("thesis.tex")).unwrap(),
+        "precious"
+    );
 }

@@ -22,19 +22,37 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 fn v3(v: &serde_json::Value) -> Vec3 {
-    let a: Vec<f32> = v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap() as f32).collect();
+    let a: Vec<f32> = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap() as f32)
+        .collect();
     vec3(a[0], a[1], a[2])
 }
 
 fn render(args: &[String]) {
-    let out = Command::new(env!("CARGO_BIN_EXE_shadowlab")).arg("--quiet").arg("render").args(args).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = Command::new(env!("CARGO_BIN_EXE_shadowlab"))
+        .arg("--quiet")
+        .arg("render")
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 fn light_from_json(l: &serde_json::Value) -> Light {
     match l["kind"].as_str().unwrap() {
-        "directional" => Light::Directional { to_light: v3(&l["to_light"]) },
-        "point" => Light::Point { position: v3(&l["position"]) },
+        "directional" => Light::Directional {
+            to_light: v3(&l["to_light"]),
+        },
+        "point" => Light::Point {
+            position: v3(&l["position"]),
+        },
         "spot" => Light::Spot {
             position: v3(&l["position"]),
             target: v3(&l["target"]),
@@ -47,7 +65,14 @@ fn light_from_json(l: &serde_json::Value) -> Light {
 #[test]
 fn exported_scene_retraced_from_recorded_camera_and_light_gives_the_same_shadow_term() {
     let bunny = data("bunny.obj");
-    for (i, spec) in ["directional:-0.5,0.8,0.3", "point:3,14,4", "spot:4,15,5:0,3,0:80"].iter().enumerate() {
+    for (i, spec) in [
+        "directional:-0.5,0.8,0.3",
+        "point:3,14,4",
+        "spot:4,15,5:0,3,0:80",
+    ]
+    .iter()
+    .enumerate()
+    {
         let d = tmp(&format!("retrace{i}"));
         let p = |n: &str| d.join(n).to_str().unwrap().to_string();
         render(&[
@@ -71,7 +96,8 @@ fn exported_scene_retraced_from_recorded_camera_and_light_gives_the_same_shadow_
             p("scene.obj"),
         ]);
         // Only the files from here on.
-        let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(p("stats.json")).unwrap()).unwrap();
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(p("stats.json")).unwrap()).unwrap();
         let c = &stats["camera"];
         let camera = Camera {
             eye: v3(&c["eye"]),
@@ -86,20 +112,30 @@ fn exported_scene_retraced_from_recorded_camera_and_light_gives_the_same_shadow_
         let light = light_from_json(&stats["light"]);
         let scene = shadowlab::scene::obj::load(&d.join("scene.obj")).unwrap();
         assert_eq!(scene.len() as u64, stats["triangles"].as_u64().unwrap());
-        let (recorded, covered) = shadowlab::shade::read_visibility_exr(&d.join("vis.exr")).unwrap();
+        let (recorded, covered) =
+            shadowlab::shade::read_visibility_exr(&d.join("vis.exr")).unwrap();
         let view = ViewSamples::render(&scene, &camera);
         let frame = Frame::new(&scene, &camera, &light, &view);
         let ours = Reference::build(&scene).visibility(&frame, &[vec2(0.5, 0.5)]);
         let mut compared = 0;
         for k in 0..covered.len() {
-            assert_eq!(covered[k], view.covered(k), "{spec}: coverage differs at pixel {k}");
+            assert_eq!(
+                covered[k],
+                view.covered(k),
+                "{spec}: coverage differs at pixel {k}"
+            );
             if covered[k] {
-                assert_eq!(ours.value[k], recorded.value[k], "{spec}: shadow term differs at pixel {k}");
+                assert_eq!(
+                    ours.value[k], recorded.value[k],
+                    "{spec}: shadow term differs at pixel {k}"
+                );
                 compared += 1;
             }
         }
         assert!(compared > 5000, "{spec}: only {compared} covered pixels");
-        let shadowed = (0..covered.len()).filter(|&k| covered[k] && recorded.value[k].x < 0.5).count();
+        let shadowed = (0..covered.len())
+            .filter(|&k| covered[k] && recorded.value[k].x < 0.5)
+            .count();
         assert!(shadowed > 500, "{spec}: the frame should show shadow");
     }
 }
@@ -127,14 +163,27 @@ fn recorded_parameters_fed_back_reproduce_the_frame_bit_for_bit() {
         "--stats".into(),
         p("a.json"),
     ]);
-    let stats: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(p("a.json")).unwrap()).unwrap();
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("a.json")).unwrap()).unwrap();
     let c = &stats["camera"];
-    let list = |v: &serde_json::Value| v.as_array().unwrap().iter().map(|x| x.to_string()).collect::<Vec<_>>().join(",");
+    let list = |v: &serde_json::Value| {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.to_string())
+            .collect::<Vec<_>>()
+            .join(",")
+    };
     let l = &stats["light"];
     let light = match l["kind"].as_str().unwrap() {
         "directional" => format!("directional:{}", list(&l["to_light"])),
         "point" => format!("point:{}", list(&l["position"])),
-        _ => format!("spot:{}:{}:{}", list(&l["position"]), list(&l["target"]), l["fov_deg"]),
+        _ => format!(
+            "spot:{}:{}:{}",
+            list(&l["position"]),
+            list(&l["target"]),
+            l["fov_deg"]
+        ),
     };
     let mut args: Vec<String> = vec![
         "--scene".into(),
@@ -142,7 +191,12 @@ fn recorded_parameters_fed_back_reproduce_the_frame_bit_for_bit() {
         "--technique".into(),
         stats["technique"].as_str().unwrap().into(),
         "--camera".into(),
-        format!("{}:{}:{}", list(&c["eye"]), list(&c["target"]), c["fov_y_deg"]),
+        format!(
+            "{}:{}:{}",
+            list(&c["eye"]),
+            list(&c["target"]),
+            c["fov_y_deg"]
+        ),
         "--light".into(),
         light,
         "--width".into(),
@@ -159,6 +213,14 @@ fn recorded_parameters_fed_back_reproduce_the_frame_bit_for_bit() {
         args.push(format!("{k}={v}"));
     }
     render(&args);
-    assert_eq!(std::fs::read(p("a.exr")).unwrap(), std::fs::read(p("b.exr")).unwrap(), "visibility differs");
-    assert_eq!(std::fs::read(p("a.png")).unwrap(), std::fs::read(p("b.png")).unwrap(), "image differs");
+    assert_eq!(
+        std::fs::read(p("a.exr")).unwrap(),
+        std::fs::read(p("b.exr")).unwrap(),
+        "visibility differs"
+    );
+    assert_eq!(
+        std::fs::read(p("a.png")).unwrap(),
+        std::fs::read(p("b.png")).unwrap(),
+        "image differs"
+    );
 }

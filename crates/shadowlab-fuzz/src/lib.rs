@@ -49,7 +49,10 @@ pub fn load(format: Format, data: &[u8]) {
     if std::fs::write(&path, data).is_err() {
         return;
     }
-    if let Ok(s) = scene::load(path.to_str().expect("temp paths are UTF-8"), &Default::default()) {
+    if let Ok(s) = scene::load(
+        path.to_str().expect("temp paths are UTF-8"),
+        &Default::default(),
+    ) {
         s.validate().expect("scene::load returns validated scenes");
         assert!(s.bounds.min.is_finite() && s.bounds.max.is_finite());
     }
@@ -100,8 +103,22 @@ pub fn pipeline(data: &[u8]) {
         transmittance: vec3(0.5, 0.7, 0.9),
     });
     // Always a floor, so there is something to receive shadows.
-    s.push([vec3(-4.0, -1.0, -4.0), vec3(-4.0, -1.0, 4.0), vec3(4.0, -1.0, 4.0)], opaque);
-    s.push([vec3(-4.0, -1.0, -4.0), vec3(4.0, -1.0, 4.0), vec3(4.0, -1.0, -4.0)], opaque);
+    s.push(
+        [
+            vec3(-4.0, -1.0, -4.0),
+            vec3(-4.0, -1.0, 4.0),
+            vec3(4.0, -1.0, 4.0),
+        ],
+        opaque,
+    );
+    s.push(
+        [
+            vec3(-4.0, -1.0, -4.0),
+            vec3(4.0, -1.0, 4.0),
+            vec3(4.0, -1.0, -4.0),
+        ],
+        opaque,
+    );
     for _ in 0..n {
         let m = if b.byte() % 4 == 0 { glass } else { opaque };
         let t = [b.vec(), b.vec(), b.vec()];
@@ -112,7 +129,9 @@ pub fn pipeline(data: &[u8]) {
     let mut camera = Camera::look_at(b.vec() * 3.0, b.vec(), 10.0 + b.byte() as f32 * 0.6, w, h);
     let light = match b.byte() % 3 {
         0 => Light::Directional { to_light: b.vec() },
-        1 => Light::Point { position: b.vec() * 2.0 },
+        1 => Light::Point {
+            position: b.vec() * 2.0,
+        },
         _ => Light::Spot {
             position: b.vec() * 2.0,
             target: b.vec(),
@@ -133,13 +152,21 @@ pub fn pipeline(data: &[u8]) {
     let mut t = techniques::create(technique).expect("every listed technique exists");
     // Small maps keep each run fast; the parameter is optional for techniques without it.
     let _ = t.set_param("resolution", "64");
-    let out = t.render(&frame).unwrap_or_else(|e| panic!("{technique} failed on a valid scene: {e}"));
+    let out = t
+        .render(&frame)
+        .unwrap_or_else(|e| panic!("{technique} failed on a valid scene: {e}"));
     assert_eq!(out.visibility.value.len(), (w * h) as usize);
     for v in &out.visibility.value {
-        assert!(v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0, "{technique}: visibility {v} out of range");
+        assert!(
+            v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0,
+            "{technique}: visibility {v} out of range"
+        );
     }
     let r = Reference::build(&s).visibility(&frame, &[shadowlab::math::vec2(0.5, 0.5)]);
     for (k, v) in r.value.iter().enumerate() {
-        assert!(v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0, "reference pixel {k}: {v}");
+        assert!(
+            v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0,
+            "reference pixel {k}: {v}"
+        );
     }
 }

@@ -7,7 +7,11 @@ use std::path::PathBuf;
 fn inputs(target: &str) -> Vec<PathBuf> {
     let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fuzz"));
     let mut out = Vec::new();
-    for dir in [root.join("corpus").join(target), root.join("artifacts").join(target), root.join("regressions").join(target)] {
+    for dir in [
+        root.join("corpus").join(target),
+        root.join("artifacts").join(target),
+        root.join("regressions").join(target),
+    ] {
         if let Ok(rd) = std::fs::read_dir(&dir) {
             for e in rd.flatten() {
                 if e.path().is_file() {

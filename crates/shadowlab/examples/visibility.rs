@@ -13,16 +13,58 @@ fn main() -> Result<()> {
         tris.push([a, c, d]);
     };
     let s = 10.0;
-    quad(&mut tris, vec3(-s, 0.0, -s), vec3(-s, 0.0, s), vec3(s, 0.0, s), vec3(s, 0.0, -s));
+    quad(
+        &mut tris,
+        vec3(-s, 0.0, -s),
+        vec3(-s, 0.0, s),
+        vec3(s, 0.0, s),
+        vec3(s, 0.0, -s),
+    );
     let (lo, hi) = (vec3(-1.0, 2.0, -1.0), vec3(1.0, 3.0, 1.0));
-    let c = |x: bool, y: bool, z: bool| vec3(if x { hi.x } else { lo.x }, if y { hi.y } else { lo.y }, if z { hi.z } else { lo.z });
+    let c = |x: bool, y: bool, z: bool| {
+        vec3(
+            if x { hi.x } else { lo.x },
+            if y { hi.y } else { lo.y },
+            if z { hi.z } else { lo.z },
+        )
+    };
     for (a, b, cc, d) in [
-        (c(false, false, false), c(true, false, false), c(true, false, true), c(false, false, true)),
-        (c(false, true, false), c(false, true, true), c(true, true, true), c(true, true, false)),
-        (c(false, false, false), c(false, true, false), c(true, true, false), c(true, false, false)),
-        (c(false, false, true), c(true, false, true), c(true, true, true), c(false, true, true)),
-        (c(false, false, false), c(false, false, true), c(false, true, true), c(false, true, false)),
-        (c(true, false, false), c(true, true, false), c(true, true, true), c(true, false, true)),
+        (
+            c(false, false, false),
+            c(true, false, false),
+            c(true, false, true),
+            c(false, false, true),
+        ),
+        (
+            c(false, true, false),
+            c(false, true, true),
+            c(true, true, true),
+            c(true, true, false),
+        ),
+        (
+            c(false, false, false),
+            c(false, true, false),
+            c(true, true, false),
+            c(true, false, false),
+        ),
+        (
+            c(false, false, true),
+            c(true, false, true),
+            c(true, true, true),
+            c(false, true, true),
+        ),
+        (
+            c(false, false, false),
+            c(false, false, true),
+            c(false, true, true),
+            c(false, true, false),
+        ),
+        (
+            c(true, false, false),
+            c(true, true, false),
+            c(true, true, true),
+            c(true, false, true),
+        ),
     ] {
         quad(&mut tris, a, b, cc, d);
     }
@@ -43,7 +85,13 @@ fn main() -> Result<()> {
     let reference = Reference::build(&scene).visibility(&frame, &pattern(PatternKind::Grid, 1)?);
     let m = shadowlab::compare::compare(&view, &shadows.visibility, &reference);
 
-    let shadowed = shadows.visibility.value.iter().enumerate().filter(|(k, v)| view.covered(*k) && v.x < 0.5).count();
+    let shadowed = shadows
+        .visibility
+        .value
+        .iter()
+        .enumerate()
+        .filter(|(k, v)| view.covered(*k) && v.x < 0.5)
+        .count();
     println!(
         "{} of {} covered pixels in shadow; pcf vs ray tracing: mismatch {:.3}%, mean error {:.4}",
         shadowed,

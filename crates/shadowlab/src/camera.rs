@@ -43,7 +43,12 @@ impl Camera {
     /// [`Camera::fit_depth_range`] (set to 0.01 and 1000 here).
     pub fn look_at(eye: Vec3, target: Vec3, fov_y_deg: f32, width: u32, height: u32) -> Self {
         let mut up = Vec3::Y;
-        if (target - eye).normalize_or_zero().cross(up).length_squared() < 1e-8 {
+        if (target - eye)
+            .normalize_or_zero()
+            .cross(up)
+            .length_squared()
+            < 1e-8
+        {
             up = Vec3::Z;
         }
         Camera {
@@ -80,16 +85,22 @@ impl Camera {
         }
         let finite = self.eye.is_finite() && self.target.is_finite() && self.up.is_finite();
         if !finite || !self.fov_y_deg.is_finite() {
-            return Err(Error::param("camera has a non-finite eye, target, up or field of view"));
+            return Err(Error::param(
+                "camera has a non-finite eye, target, up or field of view",
+            ));
         }
         if (self.target - self.eye).length_squared() == 0.0 {
             return Err(Error::param("camera eye and target are the same point"));
         }
         if !self.forward().is_finite() {
-            return Err(Error::param("camera target is too far from its eye to form a view direction"));
+            return Err(Error::param(
+                "camera target is too far from its eye to form a view direction",
+            ));
         }
         if self.forward().cross(self.up).length_squared() < 1e-12 {
-            return Err(Error::param("camera up direction is parallel to the view direction"));
+            return Err(Error::param(
+                "camera up direction is parallel to the view direction",
+            ));
         }
         if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 179.0) {
             return Err(Error::param(format!(
@@ -131,7 +142,12 @@ impl Camera {
 
     /// Camera space to clip space, depth in [0, 1].
     pub fn clip_from_view(&self) -> Mat4 {
-        crate::math::perspective_rh(self.fov_y_deg.to_radians(), self.aspect(), self.near, self.far)
+        crate::math::perspective_rh(
+            self.fov_y_deg.to_radians(),
+            self.aspect(),
+            self.near,
+            self.far,
+        )
     }
 
     /// World to clip space.
@@ -261,7 +277,10 @@ mod tests {
             let c = m * p.extend(1.0);
             let sx = (c.x / c.w * 0.5 + 0.5) * 320.0;
             let sy = (0.5 - c.y / c.w * 0.5) * 200.0;
-            assert!((sx - x).abs() < 1e-3 && (sy - y).abs() < 1e-3, "{sx},{sy} vs {x},{y}");
+            assert!(
+                (sx - x).abs() < 1e-3 && (sy - y).abs() < 1e-3,
+                "{sx},{sy} vs {x},{y}"
+            );
             assert!((c.w - 7.0).abs() < 1e-4);
         }
     }

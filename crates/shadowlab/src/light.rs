@@ -51,14 +51,18 @@ impl Light {
                 fov_deg,
             } => {
                 if !position.is_finite() || !target.is_finite() {
-                    return Err(Error::param("spot light position and target must be finite"));
+                    return Err(Error::param(
+                        "spot light position and target must be finite",
+                    ));
                 }
                 let len2 = (target - position).length_squared();
                 if len2 == 0.0 {
                     return Err(Error::param("spot light target equals its position"));
                 }
                 if !len2.is_finite() {
-                    return Err(Error::param("spot light target is too far from its position to form a direction"));
+                    return Err(Error::param(
+                        "spot light target is too far from its position to form a direction",
+                    ));
                 }
                 if !(fov_deg > 0.0 && fov_deg < 179.0) {
                     return Err(Error::param(format!(
@@ -79,9 +83,13 @@ impl Light {
     /// length is kept bit for bit, so recorded lights reproduce exactly.
     pub fn normalized(self) -> Light {
         match self {
-            Light::Directional { to_light } if (to_light.length_squared() - 1.0).abs() > 4.0 * f32::EPSILON => Light::Directional {
-                to_light: to_light.normalize(),
-            },
+            Light::Directional { to_light }
+                if (to_light.length_squared() - 1.0).abs() > 4.0 * f32::EPSILON =>
+            {
+                Light::Directional {
+                    to_light: to_light.normalize(),
+                }
+            }
             l => l,
         }
     }
@@ -177,7 +185,14 @@ pub struct LightSample {
 }
 
 impl LightView {
-    fn new(light_from_world: Mat4, clip_from_light: Mat4, ortho: bool, near: f32, far: f32, extent: f32) -> Self {
+    fn new(
+        light_from_world: Mat4,
+        clip_from_light: Mat4,
+        ortho: bool,
+        near: f32,
+        far: f32,
+        extent: f32,
+    ) -> Self {
         LightView {
             light_from_world,
             clip_from_light,
@@ -228,7 +243,11 @@ impl LightView {
         let eye = c + dir * r;
         let light_from_world = crate::math::look_at_rh(eye, c, pick_up(dir));
         let mut rx = Aabb::EMPTY;
-        let src = if receivers.is_empty() { scene } else { receivers };
+        let src = if receivers.is_empty() {
+            scene
+        } else {
+            receivers
+        };
         for p in src.corners() {
             rx.grow(light_from_world.transform_point3(p));
         }
@@ -245,8 +264,16 @@ impl LightView {
         let span = (far_d - near).max(r * 1e-6);
         let near = near - span * 1e-3;
         let far = far_d + span * 1e-3;
-        let clip_from_light = crate::math::orthographic_rh(cx - half, cx + half, cy - half, cy + half, near, far);
-        LightView::new(light_from_world, clip_from_light, true, near, far, 2.0 * half)
+        let clip_from_light =
+            crate::math::orthographic_rh(cx - half, cx + half, cy - half, cy + half, near, far);
+        LightView::new(
+            light_from_world,
+            clip_from_light,
+            true,
+            near,
+            far,
+            2.0 * half,
+        )
     }
 
     /// A perspective view from `position` towards `target` with full angle `fov_deg`,
@@ -266,12 +293,20 @@ impl LightView {
         let near = if zmin > 0.0 { zmin * 0.99 } else { far * 1e-4 }.max(far * 1e-5);
         let fov = fov_deg.to_radians();
         let clip_from_light = crate::math::perspective_rh(fov, 1.0, near, far);
-        LightView::new(light_from_world, clip_from_light, false, near, far, 2.0 * (fov * 0.5).tan())
+        LightView::new(
+            light_from_world,
+            clip_from_light,
+            false,
+            near,
+            far,
+            2.0 * (fov * 0.5).tan(),
+        )
     }
 
     /// The six 90° faces of a point light's cube, in the order +X, −X, +Y, −Y, +Z, −Z.
     pub fn cube(position: Vec3, scene: &Aabb) -> [LightView; 6] {
-        CUBE_FACES.map(|(dir, up)| LightView::perspective(position, position + dir, 90.0, up, scene))
+        CUBE_FACES
+            .map(|(dir, up)| LightView::perspective(position, position + dir, 90.0, up, scene))
     }
 }
 
@@ -312,7 +347,9 @@ pub fn cube_face(d: Vec3) -> usize {
 /// lights, six for a point light. `receivers` is the box of the visible surface points.
 pub fn light_views(light: &Light, receivers: &Aabb, scene: &Aabb, pad: f32) -> Vec<LightView> {
     match *light {
-        Light::Directional { to_light } => vec![LightView::directional(to_light, receivers, scene, pad)],
+        Light::Directional { to_light } => {
+            vec![LightView::directional(to_light, receivers, scene, pad)]
+        }
         Light::Spot {
             position,
             target,
@@ -336,10 +373,17 @@ mod tests {
     fn cube_faces_cover_their_directions() {
         let b = Aabb::from_points(&[vec3(-5.0, -5.0, -5.0), vec3(5.0, 5.0, 5.0)]);
         let views = LightView::cube(Vec3::ZERO, &b);
-        for d in [vec3(1.0, 0.3, -0.2), vec3(-0.1, -1.0, 0.9), vec3(0.2, 0.1, -1.0)] {
+        for d in [
+            vec3(1.0, 0.3, -0.2),
+            vec3(-0.1, -1.0, 0.9),
+            vec3(0.2, 0.1, -1.0),
+        ] {
             let f = cube_face(d);
             let s = views[f].project(d * 2.0);
-            assert!((0.0..=1.0).contains(&s.u) && (0.0..=1.0).contains(&s.v), "{d} -> {f} {s:?}");
+            assert!(
+                (0.0..=1.0).contains(&s.u) && (0.0..=1.0).contains(&s.v),
+                "{d} -> {f} {s:?}"
+            );
         }
     }
 

@@ -258,7 +258,11 @@ mod tests {
 
     #[test]
     fn plane_intersection_matches_triangle_intersection_inside() {
-        let v = [vec3(0.0, 0.0, 0.0), vec3(2.0, 0.0, 0.0), vec3(0.0, 2.0, 1.0)];
+        let v = [
+            vec3(0.0, 0.0, 0.0),
+            vec3(2.0, 0.0, 0.0),
+            vec3(0.0, 2.0, 1.0),
+        ];
         let o = vec3(0.3, 0.4, 5.0);
         let d = vec3(0.01, -0.02, -1.0);
         let a = intersect_triangle(o, d, 0.0, f32::INFINITY, v).unwrap();

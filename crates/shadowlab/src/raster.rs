@@ -177,7 +177,10 @@ fn setup_one(
     }
     a.clear();
     for k in 0..3 {
-        a.push(ClipVert { c: clip[k], d: d[k] });
+        a.push(ClipVert {
+            c: clip[k],
+            d: d[k],
+        });
     }
     if !inside_all {
         for p in &planes {
@@ -205,7 +208,13 @@ fn setup_one(
     }
 }
 
-fn push_triangle(id: u32, mut t: [([i64; 2], f32, f32); 3], width: u32, height: u32, out: &mut Vec<SetupTriangle>) {
+fn push_triangle(
+    id: u32,
+    mut t: [([i64; 2], f32, f32); 3],
+    width: u32,
+    height: u32,
+    out: &mut Vec<SetupTriangle>,
+) {
     let mut area = orient2d_i64(t[0].0, t[1].0, t[2].0);
     if area == 0 {
         return;
@@ -276,7 +285,13 @@ fn bin(tris: &[SetupTriangle], tiles_x: u32, tiles_y: u32) -> Vec<Vec<u32>> {
 /// Rasterizes `tris` over a `width × height` target. For each 64×64 tile (in parallel),
 /// `new_state` makes the tile's state and `fragment` is called for each covered pixel of
 /// each triangle, triangles in index order. Returns every tile's rectangle and state.
-pub fn rasterize<S, N, F>(tris: &[SetupTriangle], width: u32, height: u32, new_state: N, fragment: F) -> Vec<(TileRect, S)>
+pub fn rasterize<S, N, F>(
+    tris: &[SetupTriangle],
+    width: u32,
+    height: u32,
+    new_state: N,
+    fragment: F,
+) -> Vec<(TileRect, S)>
 where
     S: Send,
     N: Fn(TileRect) -> S + Sync,
@@ -298,7 +313,9 @@ where
             };
             let mut state = new_state(rect);
             for &ti in list {
-                raster_triangle(&tris[ti as usize], &rect, &mut |f| fragment(&mut state, &rect, f));
+                raster_triangle(&tris[ti as usize], &rect, &mut |f| {
+                    fragment(&mut state, &rect, f)
+                });
             }
             (rect, state)
         })
@@ -447,7 +464,10 @@ mod tests {
     struct Lcg(u64);
     impl Lcg {
         fn next(&mut self) -> f32 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((self.0 >> 40) as f32) / (1u64 << 24) as f32
         }
     }
@@ -500,22 +520,34 @@ mod tests {
             let tilt = (rng.next() - 0.5) * 1.2;
             let world = Mat4::from_rotation_z(angle) * Mat4::from_rotation_x(tilt);
             let eye = vec3(0.0, 0.0, 5.0);
-            let clip_from_world = crate::math::perspective_rh(0.9, 1.3, 0.1, 100.0) * crate::math::look_at_rh(eye, Vec3::ZERO, Vec3::Y);
+            let clip_from_world = crate::math::perspective_rh(0.9, 1.3, 0.1, 100.0)
+                * crate::math::look_at_rh(eye, Vec3::ZERO, Vec3::Y);
             let (w, h) = (157, 121);
-            let world_tris: Vec<[Vec3; 3]> = tris.iter().map(|t| t.map(|p| world.transform_point3(p))).collect();
+            let world_tris: Vec<[Vec3; 3]> = tris
+                .iter()
+                .map(|t| t.map(|p| world.transform_point3(p)))
+                .collect();
             let setups = setup(world_tris.len(), w, h, |i| {
                 let t = world_tris[i];
                 (t.map(|p| clip_from_world * p.extend(1.0)), [0.0; 3])
             });
             let counts = coverage_count(&setups, w, h);
             // Reference coverage: pixel centres strictly inside the projected square.
-            let corners: Vec<[f64; 2]> = [vec3(-1.0, -1.0, 0.0), vec3(1.0, -1.0, 0.0), vec3(1.0, 1.0, 0.0), vec3(-1.0, 1.0, 0.0)]
-                .iter()
-                .map(|p| {
-                    let c = clip_from_world * world.transform_point3(*p).extend(1.0);
-                    [((c.x / c.w) as f64 * 0.5 + 0.5) * w as f64, (0.5 - (c.y / c.w) as f64 * 0.5) * h as f64]
-                })
-                .collect();
+            let corners: Vec<[f64; 2]> = [
+                vec3(-1.0, -1.0, 0.0),
+                vec3(1.0, -1.0, 0.0),
+                vec3(1.0, 1.0, 0.0),
+                vec3(-1.0, 1.0, 0.0),
+            ]
+            .iter()
+            .map(|p| {
+                let c = clip_from_world * world.transform_point3(*p).extend(1.0);
+                [
+                    ((c.x / c.w) as f64 * 0.5 + 0.5) * w as f64,
+                    (0.5 - (c.y / c.w) as f64 * 0.5) * h as f64,
+                ]
+            })
+            .collect();
             let mut inside_px = 0;
             for y in 0..h {
                 for x in 0..w {
@@ -536,7 +568,11 @@ mod tests {
                         continue; // on the outer boundary: either answer is right
                     }
                     let inside = sgn.iter().all(|&s| s) || sgn.iter().all(|&s| !s);
-                    assert_eq!(c == 1, inside, "trial {trial}: pixel {x},{y} inside={inside} count={c}");
+                    assert_eq!(
+                        c == 1,
+                        inside,
+                        "trial {trial}: pixel {x},{y} inside={inside} count={c}"
+                    );
                     inside_px += inside as u32;
                 }
             }
@@ -547,10 +583,18 @@ mod tests {
     #[test]
     fn clipped_triangles_stay_watertight() {
         // A quad crossing the near plane and the guard band, split along its diagonal.
-        let q = [vec3(-50.0, -1.0, 4.9), vec3(50.0, -1.0, 4.9), vec3(50.0, -1.0, -500.0), vec3(-50.0, -1.0, -500.0)];
+        let q = [
+            vec3(-50.0, -1.0, 4.9),
+            vec3(50.0, -1.0, 4.9),
+            vec3(50.0, -1.0, -500.0),
+            vec3(-50.0, -1.0, -500.0),
+        ];
         let tris = [[q[0], q[1], q[2]], [q[0], q[2], q[3]]];
-        let clip_from_world = crate::math::perspective_rh(1.0, 1.0, 0.1, 1000.0) * crate::math::look_at_rh(vec3(0.0, 0.0, 5.0), vec3(0.0, -0.2, 0.0), Vec3::Y);
-        let setups = setup(2, 200, 200, |i| (tris[i].map(|p| clip_from_world * p.extend(1.0)), [0.0; 3]));
+        let clip_from_world = crate::math::perspective_rh(1.0, 1.0, 0.1, 1000.0)
+            * crate::math::look_at_rh(vec3(0.0, 0.0, 5.0), vec3(0.0, -0.2, 0.0), Vec3::Y);
+        let setups = setup(2, 200, 200, |i| {
+            (tris[i].map(|p| clip_from_world * p.extend(1.0)), [0.0; 3])
+        });
         let counts = coverage_count(&setups, 200, 200);
         assert!(counts.iter().all(|&c| c <= 1));
         // The floor fills the bottom half of the image with no holes.

@@ -82,7 +82,8 @@ impl<'s> Reference<'s> {
 
     /// Bytes held by the BVH.
     pub fn memory_bytes(&self) -> usize {
-        self.bvh.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>() + self.bvh.primitive_indices.len() * 4
+        self.bvh.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
+            + self.bvh.primitive_indices.len() * 4
     }
 
     /// RGB transmittance from the surface point `sp` (on triangle `own`, unit face normal
@@ -143,24 +144,25 @@ impl<'s> Reference<'s> {
         let ray = Ray::new_inf(Vec3A::from(o * s), Vec3A::from(dir));
         let prim = &self.bvh.primitive_indices;
         let mut best: Option<(f32, u32, [f32; 3])> = None;
-        self.bvh.ray_traverse(ray, &mut obvhs::ray::RayHit::none(), |_, id| {
-            let tri = prim[id];
-            match intersect_triangle(o, dir, 0.0, f32::INFINITY, scene.triangle(tri as usize)) {
-                Some(h) => {
-                    let better = match best {
-                        None => true,
-                        Some((bt, bi, _)) => h.t < bt || (h.t == bt && tri < bi),
-                    };
-                    if better {
-                        best = Some((h.t, tri, h.b));
+        self.bvh
+            .ray_traverse(ray, &mut obvhs::ray::RayHit::none(), |_, id| {
+                let tri = prim[id];
+                match intersect_triangle(o, dir, 0.0, f32::INFINITY, scene.triangle(tri as usize)) {
+                    Some(h) => {
+                        let better = match best {
+                            None => true,
+                            Some((bt, bi, _)) => h.t < bt || (h.t == bt && tri < bi),
+                        };
+                        if better {
+                            best = Some((h.t, tri, h.b));
+                        }
+                        // Keep the traversal interval open at the current best so equal-t
+                        // candidates are still visited for the tie-break.
+                        best.map_or(f32::INFINITY, |b| b.0.next_up() * s)
                     }
-                    // Keep the traversal interval open at the current best so equal-t
-                    // candidates are still visited for the tie-break.
-                    best.map_or(f32::INFINITY, |b| b.0.next_up() * s)
+                    None => f32::INFINITY,
                 }
-                None => f32::INFINITY,
-            }
-        });
+            });
         best.map(|(t, tri, b)| PrimaryHit {
             triangle: tri,
             point: SurfacePoint::from_barycentrics(scene.triangle(tri as usize), b),
@@ -187,7 +189,12 @@ impl<'s> Reference<'s> {
                         if !view.covered(k) {
                             return Vec3::ONE;
                         }
-                        let centre = self.transmittance(light, &view.surface_point(k), view.normal[k], view.triangle[k]);
+                        let centre = self.transmittance(
+                            light,
+                            &view.surface_point(k),
+                            view.normal[k],
+                            view.triangle[k],
+                        );
                         if samples.len() <= 1 {
                             return centre;
                         }
@@ -258,7 +265,10 @@ mod tests {
     struct Lcg(u64);
     impl Lcg {
         fn next(&mut self) -> f32 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((self.0 >> 40) as f32) / (1u64 << 24) as f32
         }
         fn v(&mut self) -> Vec3 {
@@ -280,19 +290,35 @@ mod tests {
             for i in 0..300 {
                 let c = rng.v();
                 let t = [c + rng.v() * 0.3, c + rng.v() * 0.3, c + rng.v() * 0.3];
-                scene.push(t, if trial % 2 == 1 && i % 3 == 0 { glass } else { opaque });
+                scene.push(
+                    t,
+                    if trial % 2 == 1 && i % 3 == 0 {
+                        glass
+                    } else {
+                        opaque
+                    },
+                );
             }
             let r = Reference::build(&scene);
             for _ in 0..2000 {
                 let o = rng.v() * 1.5;
                 let dir = rng.v().normalize();
-                let t_max = if rng.next() < 0.5 { f32::INFINITY } else { rng.next() * 3.0 };
+                let t_max = if rng.next() < 0.5 {
+                    f32::INFINITY
+                } else {
+                    rng.next() * 3.0
+                };
                 let own = (rng.next() * 300.0) as u32;
-                assert_eq!(r.occlusion(o, dir, t_max, own), brute_force_occlusion(&scene, o, dir, t_max, own));
+                assert_eq!(
+                    r.occlusion(o, dir, t_max, own),
+                    brute_force_occlusion(&scene, o, dir, t_max, own)
+                );
                 let hit = r.closest_hit(o, dir).map(|h| (h.triangle, h.t));
                 let mut brute: Option<(u32, f32)> = None;
                 for i in 0..scene.len() {
-                    if let Some(h) = intersect_triangle(o, dir, 0.0, f32::INFINITY, scene.triangle(i)) {
+                    if let Some(h) =
+                        intersect_triangle(o, dir, 0.0, f32::INFINITY, scene.triangle(i))
+                    {
                         if brute.is_none_or(|b| h.t < b.1) {
                             brute = Some((i as u32, h.t));
                         }

@@ -24,7 +24,9 @@ impl std::str::FromStr for PatternKind {
         match s {
             "grid" => Ok(PatternKind::Grid),
             "rotated-grid" | "rgss" => Ok(PatternKind::RotatedGrid),
-            _ => Err(Error::param(format!("unknown sample pattern {s:?}: expected grid or rotated-grid"))),
+            _ => Err(Error::param(format!(
+                "unknown sample pattern {s:?}: expected grid or rotated-grid"
+            ))),
         }
     }
 }
@@ -38,7 +40,9 @@ pub const MAX_SAMPLES: u32 = 1024;
 /// supersampled reference shares these positions.
 pub fn pattern(kind: PatternKind, n: u32) -> Result<Vec<Vec2>> {
     if n == 0 || n > MAX_SAMPLES {
-        return Err(Error::param(format!("samples per pixel {n} is outside 1..={MAX_SAMPLES}")));
+        return Err(Error::param(format!(
+            "samples per pixel {n} is outside 1..={MAX_SAMPLES}"
+        )));
     }
     if n == 1 {
         return Ok(vec![vec2(0.5, 0.5)]);
@@ -51,7 +55,13 @@ pub fn pattern(kind: PatternKind, n: u32) -> Result<Vec<Vec2>> {
     let a = n / b;
     // Cell centres for an odd count, cell corners for an even one: either way the middle
     // sample of the axis lands on 0.5.
-    let axis = |i: u32, m: u32| if m % 2 == 1 { (i as f32 + 0.5) / m as f32 } else { i as f32 / m as f32 };
+    let axis = |i: u32, m: u32| {
+        if m % 2 == 1 {
+            (i as f32 + 0.5) / m as f32
+        } else {
+            i as f32 / m as f32
+        }
+    };
     let mut out = Vec::with_capacity(n as usize);
     for j in 0..b {
         for i in 0..a {
@@ -94,7 +104,9 @@ mod tests {
             for n in [1, 4, 8, 16, 32, 64, 128] {
                 let p = pattern(kind, n).unwrap();
                 assert_eq!(p.len(), n as usize);
-                assert!(p.iter().all(|q| (0.0..1.0).contains(&q.x) && (0.0..1.0).contains(&q.y)));
+                assert!(p
+                    .iter()
+                    .all(|q| (0.0..1.0).contains(&q.x) && (0.0..1.0).contains(&q.y)));
                 let mean = p.iter().fold(Vec2::ZERO, |a, q| a + *q) / n as f32;
                 // A centred grid of an even count is off by half a spacing (at most 1/4).
                 assert!(

@@ -22,7 +22,11 @@ pub type RgbImage = ImageBuffer<Rgb<u8>, Vec<u8>>;
 fn to_srgb8(c: Vec3) -> [u8; 3] {
     c.to_array().map(|x| {
         let x = x.clamp(0.0, 1.0);
-        let s = if x <= 0.0031308 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+        let s = if x <= 0.0031308 {
+            12.92 * x
+        } else {
+            1.055 * x.powf(1.0 / 2.4) - 0.055
+        };
         (s * 255.0 + 0.5) as u8
     })
 }
@@ -39,8 +43,14 @@ pub fn shade(scene: &Scene, view: &ViewSamples, light: &Light, vis: &Visibility)
         let p = view.position[k];
         let n = view.normal[k];
         let (l, _) = light.shadow_ray(p);
-        let direct = if light.illuminates(p, n) { n.dot(l).max(0.0) } else { 0.0 };
-        Rgb(to_srgb8(albedo * (AMBIENT + (1.0 - AMBIENT) * direct * vis.value[k])))
+        let direct = if light.illuminates(p, n) {
+            n.dot(l).max(0.0)
+        } else {
+            0.0
+        };
+        Rgb(to_srgb8(
+            albedo * (AMBIENT + (1.0 - AMBIENT) * direct * vis.value[k]),
+        ))
     })
 }
 
@@ -53,7 +63,8 @@ pub fn error_image(view: &ViewSamples, vis: &Visibility, reference: &Visibility)
         if !view.covered(k) {
             return Rgb([40, 40, 40]);
         }
-        let d = crate::compare::luminance(vis.value[k]) - crate::compare::luminance(reference.value[k]);
+        let d =
+            crate::compare::luminance(vis.value[k]) - crate::compare::luminance(reference.value[k]);
         let m = (d.abs().sqrt() * 255.0) as u8;
         if d > 0.0 {
             Rgb([m, 0, 0])
@@ -74,7 +85,9 @@ pub fn save_png(img: &RgbImage, path: &Path) -> Result<()> {
 /// Writes a depth map as a grey PNG (near = white, empty = black).
 pub fn write_depth_png(path: &Path, map: &DepthBuffer) -> Result<()> {
     let finite = map.depth.iter().copied().filter(|d| d.is_finite());
-    let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), d| (a.min(d), b.max(d)));
+    let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), d| {
+        (a.min(d), b.max(d))
+    });
     let span = (hi - lo).max(1e-20);
     let img: RgbImage = ImageBuffer::from_fn(map.width, map.height, |x, y| {
         let d = map.depth[(y * map.width + x) as usize];

@@ -105,7 +105,13 @@ impl ViewSamples {
                             Vec3::ZERO
                         }
                     };
-                    row.push(Some((sp, n, (sp.p - eye).dot(fwd), at(1.0, 0.0), at(0.0, 1.0))));
+                    row.push(Some((
+                        sp,
+                        n,
+                        (sp.p - eye).dot(fwd),
+                        at(1.0, 0.0),
+                        at(0.0, 1.0),
+                    )));
                 }
                 row
             })

@@ -42,7 +42,12 @@ fn camera_pass_depth_agrees_with_ray_cast_at_pixel_centres() {
                     covered += 1;
                     // The ray's direction has unit length along the view axis, so t is depth.
                     let rel = (h.t - view.depth[k]).abs() / h.t;
-                    assert!(rel < 1e-4, "pixel {x},{y}: raster depth {} vs ray {}", view.depth[k], h.t);
+                    assert!(
+                        rel < 1e-4,
+                        "pixel {x},{y}: raster depth {} vs ray {}",
+                        view.depth[k],
+                        h.t
+                    );
                     let p = c.eye + c.ray_direction(x as f32 + 0.5, y as f32 + 0.5) * h.t;
                     assert!((p - view.position[k]).length() < 1e-3 * s.bounds.diagonal());
                 }
@@ -70,7 +75,11 @@ fn sm_mismatch_falls_as_resolution_rises() {
         let mut sm = techniques::create("sm").unwrap();
         sm.set_param("resolution", &res.to_string()).unwrap();
         let m = compare(&view, &sm.render(&frame).unwrap().visibility, &reference);
-        assert!(m.mismatch_rate < last, "resolution {res}: mismatch {} did not fall below {last}", m.mismatch_rate);
+        assert!(
+            m.mismatch_rate < last,
+            "resolution {res}: mismatch {} did not fall below {last}",
+            m.mismatch_rate
+        );
         last = m.mismatch_rate;
     }
     assert!(last < 0.01, "sm at 2048² still mismatches {last}");
@@ -95,12 +104,26 @@ fn shadow_maps_agree_with_reference_for_every_light_kind() {
     ] {
         let frame = Frame::new(&s, &c, &l, &view);
         let reference = Reference::build(&s).visibility(&frame, &[vec2(0.5, 0.5)]);
-        let lit = reference.value.iter().enumerate().filter(|(k, v)| view.covered(*k) && v.x > 0.5).count();
+        let lit = reference
+            .value
+            .iter()
+            .enumerate()
+            .filter(|(k, v)| view.covered(*k) && v.x > 0.5)
+            .count();
         let dark = view.covered_count() - lit;
-        assert!(lit > 1000 && dark > 1000, "{}: the frame must show light and shadow", l.kind());
+        assert!(
+            lit > 1000 && dark > 1000,
+            "{}: the frame must show light and shadow",
+            l.kind()
+        );
         let mut sm = techniques::create("pcf").unwrap();
         let m = compare(&view, &sm.render(&frame).unwrap().visibility, &reference);
-        assert!(m.mismatch_rate < 0.02, "{}: pcf mismatch {}", l.kind(), m.mismatch_rate);
+        assert!(
+            m.mismatch_rate < 0.02,
+            "{}: pcf mismatch {}",
+            l.kind(),
+            m.mismatch_rate
+        );
     }
 }
 
@@ -149,7 +172,10 @@ fn results_are_identical_for_one_two_and_four_threads() {
     c.height = 120;
     let mut outputs = Vec::new();
     for threads in [1, 2, 4] {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
         let out = pool.install(|| {
             let view = ViewSamples::render(&s, &c);
             let frame = Frame::new(&s, &c, &l, &view);
@@ -164,10 +190,18 @@ fn results_are_identical_for_one_two_and_four_threads() {
         outputs.push(out);
     }
     for o in &outputs[1..] {
-        assert!(o.0.iter().zip(&outputs[0].0).all(|(a, b)| a.to_bits() == b.to_bits()), "camera pass depth differs");
+        assert!(
+            o.0.iter()
+                .zip(&outputs[0].0)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "camera pass depth differs"
+        );
         assert_eq!(o.1, outputs[0].1, "camera pass ids differ");
         for ((name, a), (_, b)) in o.2.iter().zip(&outputs[0].2) {
-            let same = a.iter().zip(b).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits));
+            let same = a
+                .iter()
+                .zip(b)
+                .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits));
             assert!(same, "{name} differs across thread counts");
         }
     }

@@ -35,7 +35,13 @@ pub struct BenchReport {
 }
 
 /// Every suite name.
-pub const SUITES: &[&str] = &["afsm-scaling", "subpixel-scaling", "csm-table", "asm-walkthrough", "psm-lights"];
+pub const SUITES: &[&str] = &[
+    "afsm-scaling",
+    "subpixel-scaling",
+    "csm-table",
+    "asm-walkthrough",
+    "psm-lights",
+];
 
 /// The median of `n` timed runs of `f`, in milliseconds, and the last result.
 pub fn median_ms<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
@@ -54,7 +60,11 @@ pub fn median_ms<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
 pub fn machine() -> Value {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
         .unwrap_or_default();
     json!({
         "cpu": cpu,
@@ -73,10 +83,17 @@ pub fn run(a: &BenchArgs) -> Result<()> {
         "csm-table" => csm_table::run(a)?,
         "asm-walkthrough" => asm_walkthrough::run(a)?,
         "psm-lights" => psm_lights::run(a)?,
-        _ => bail!("unknown bench suite {:?}: known suites are {}", a.suite, SUITES.join(", ")),
+        _ => bail!(
+            "unknown bench suite {:?}: known suites are {}",
+            a.suite,
+            SUITES.join(", ")
+        ),
     };
     if let Some(p) = &a.json {
-        crate::commands::write_json(p, &json!({"suite": a.suite, "machine": machine(), "rows": report.rows}))?;
+        crate::commands::write_json(
+            p,
+            &json!({"suite": a.suite, "machine": machine(), "rows": report.rows}),
+        )?;
     }
     Ok(())
 }

@@ -14,9 +14,17 @@ pub fn write_obj(scene: &Scene, path: &Path) -> Result<()> {
         what: e.to_string(),
     };
     let mtl_path = path.with_extension("mtl");
-    let mtl_name = mtl_path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let mtl_name = mtl_path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let mut obj = String::with_capacity(scene.len() * 100);
-    let _ = writeln!(obj, "# shadowlab scene export: {} ({} triangles, world space)", scene.name, scene.len());
+    let _ = writeln!(
+        obj,
+        "# shadowlab scene export: {} ({} triangles, world space)",
+        scene.name,
+        scene.len()
+    );
     let _ = writeln!(obj, "mtllib {mtl_name}");
     let mut mtl = String::new();
     let names: Vec<String> = scene
@@ -27,10 +35,18 @@ pub fn write_obj(scene: &Scene, path: &Path) -> Result<()> {
         .collect();
     for (m, name) in scene.materials.iter().zip(&names) {
         // `{:?}` prints the shortest text that parses back to the same f32.
-        let _ = writeln!(mtl, "newmtl {name}\nKd {:?} {:?} {:?}", m.color.x, m.color.y, m.color.z);
+        let _ = writeln!(
+            mtl,
+            "newmtl {name}\nKd {:?} {:?} {:?}",
+            m.color.x, m.color.y, m.color.z
+        );
         let t = m.transmittance;
         // Opaque: d 1. Otherwise d < 1 and Tf carries the RGB transmittance exactly.
-        let opacity = if m.is_opaque() { 1.0 } else { (1.0 - t.max_element()).min(0.999) };
+        let opacity = if m.is_opaque() {
+            1.0
+        } else {
+            (1.0 - t.max_element()).min(0.999)
+        };
         let _ = writeln!(mtl, "d {opacity:?}\nTf {:?} {:?} {:?}\n", t.x, t.y, t.z);
     }
     // Triangles keep their order (ties between coincident surfaces resolve the same way on
@@ -48,7 +64,13 @@ pub fn write_obj(scene: &Scene, path: &Path) -> Result<()> {
         for p in scene.triangle(i) {
             let _ = writeln!(obj, "v {:?} {:?} {:?}", p.x, p.y, p.z);
         }
-        let _ = writeln!(obj, "f {} {} {}", next_vertex, next_vertex + 1, next_vertex + 2);
+        let _ = writeln!(
+            obj,
+            "f {} {} {}",
+            next_vertex,
+            next_vertex + 1,
+            next_vertex + 2
+        );
         next_vertex += 3;
     }
     std::fs::write(path, obj).map_err(out_err)?;

@@ -134,7 +134,13 @@ impl Scene {
     }
 
     /// Appends indexed triangles transformed by `world_from_mesh`.
-    pub fn push_indexed(&mut self, positions: &[Vec3], indices: &[[u32; 3]], world_from_mesh: Mat4, material: u32) {
+    pub fn push_indexed(
+        &mut self,
+        positions: &[Vec3],
+        indices: &[[u32; 3]],
+        world_from_mesh: Mat4,
+        material: u32,
+    ) {
         self.reserve(indices.len());
         for tri in indices {
             let t = tri.map(|i| world_from_mesh.transform_point3(positions[i as usize]));
@@ -207,10 +213,15 @@ impl Scene {
         }
         for i in 0..self.len() {
             if !self.triangle(i).iter().all(|p| p.is_finite()) {
-                return Err(err(format!("triangle {i} has a non-finite (NaN or infinite) vertex")));
+                return Err(err(format!(
+                    "triangle {i} has a non-finite (NaN or infinite) vertex"
+                )));
             }
             if self.material[i] as usize >= self.materials.len() {
-                return Err(err(format!("triangle {i} names material {} that does not exist", self.material[i])));
+                return Err(err(format!(
+                    "triangle {i} names material {} that does not exist",
+                    self.material[i]
+                )));
             }
         }
         for m in &self.materials {
@@ -245,7 +256,13 @@ impl Scene {
             let r = (b.max - b.min).length() * 0.5;
             let fov = 45.0f32;
             let dist = r / (fov.to_radians() * 0.5).sin() * 1.05;
-            self.camera = Some(Camera::look_at(c + AUTO_VIEW_DIRECTION.normalize() * dist, c, fov, 1024, 768));
+            self.camera = Some(Camera::look_at(
+                c + AUTO_VIEW_DIRECTION.normalize() * dist,
+                c,
+                fov,
+                1024,
+                768,
+            ));
         }
         if self.light.is_none() {
             self.light = Some(Light::Directional {
@@ -264,7 +281,10 @@ pub fn load(spec: &str, params: &BTreeMap<String, String>) -> Result<Scene> {
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase());
-    let is_file = matches!(ext.as_deref(), Some("obj" | "ply" | "gltf" | "glb" | "toml"));
+    let is_file = matches!(
+        ext.as_deref(),
+        Some("obj" | "ply" | "gltf" | "glb" | "toml")
+    );
     if !is_file {
         let s = builtin::generate(spec, params)?;
         s.validate()?;

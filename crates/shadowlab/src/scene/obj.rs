@@ -50,7 +50,11 @@ fn build(
 ) -> Result<Scene> {
     // A missing or broken .mtl leaves every triangle with the default material.
     let mats = mats.unwrap_or_default();
-    let mut scene = Scene::new(path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
+    let mut scene = Scene::new(
+        path.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+    );
     let default = scene.add_material(Material::default());
     let base = scene.materials.len() as u32;
     for m in &mats {
@@ -67,7 +71,11 @@ fn build(
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
             return Err(Error::format(
                 path,
-                format!("object {:?}: vertex {} has a non-finite coordinate", model.name, i + 1),
+                format!(
+                    "object {:?}: vertex {} has a non-finite coordinate",
+                    model.name,
+                    i + 1
+                ),
             ));
         }
         let mut tris = Vec::with_capacity(mesh.indices.len() / 3);
@@ -75,7 +83,10 @@ fn build(
             if c.iter().any(|&i| i as usize >= nverts) {
                 return Err(Error::format(
                     path,
-                    format!("object {:?}: a face refers to a vertex that does not exist", model.name),
+                    format!(
+                        "object {:?}: a face refers to a vertex that does not exist",
+                        model.name
+                    ),
                 ));
             }
             tris.push([c[0], c[1], c[2]]);
@@ -97,13 +108,18 @@ fn check_faces(path: &Path) -> Result<()> {
         source: e,
     })?;
     for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
-        let mut tokens = line.split(|b| b.is_ascii_whitespace()).filter(|t| !t.is_empty());
+        let mut tokens = line
+            .split(|b| b.is_ascii_whitespace())
+            .filter(|t| !t.is_empty());
         if tokens.next() == Some(b"f".as_slice()) {
             let k = tokens.count();
             if k < 3 {
                 return Err(Error::format(
                     path,
-                    format!("line {}: a face with {k} vertices, fewer than 3 (is the file truncated?)", n + 1),
+                    format!(
+                        "line {}: a face with {k} vertices, fewer than 3 (is the file truncated?)",
+                        n + 1
+                    ),
                 ));
             }
         }
@@ -118,16 +134,27 @@ fn convert(m: &tobj::Material) -> Material {
         .unwrap_or(Vec3::splat(0.8))
         .clamp(Vec3::ZERO, Vec3::ONE);
     let mut opacity = m.dissolve.map(|d| d as f32).unwrap_or(1.0);
-    if let Some(tr) = m.unknown_param.get("Tr").and_then(|s| s.trim().parse::<f32>().ok()) {
+    if let Some(tr) = m
+        .unknown_param
+        .get("Tr")
+        .and_then(|s| s.trim().parse::<f32>().ok())
+    {
         if m.dissolve.is_none() {
             opacity = 1.0 - tr;
         }
     }
-    let opacity = if opacity.is_finite() { opacity.clamp(0.0, 1.0) } else { 1.0 };
+    let opacity = if opacity.is_finite() {
+        opacity.clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
     let mut transmittance = Vec3::splat(1.0 - opacity);
     if opacity < 1.0 {
         if let Some(tf) = m.unknown_param.get("Tf") {
-            let v: Vec<f32> = tf.split_whitespace().filter_map(|s| s.parse().ok()).collect();
+            let v: Vec<f32> = tf
+                .split_whitespace()
+                .filter_map(|s| s.parse().ok())
+                .collect();
             if v.len() == 3 && v.iter().all(|x| x.is_finite()) {
                 // Tf is the RGB share of light passing a non-opaque surface: taken as the
                 // transmittance itself, so an exported scene reads back exactly.

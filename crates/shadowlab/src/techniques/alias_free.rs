@@ -179,7 +179,10 @@ fn dump_bsp(path: &std::path::Path, t: &Bsp) -> Result<()> {
         return crate::shade::save_png(&img, path);
     };
     let (lo, hi) = (root.lo, root.hi);
-    let span = [(hi[0] - lo[0]).max(f32::MIN_POSITIVE), (hi[1] - lo[1]).max(f32::MIN_POSITIVE)];
+    let span = [
+        (hi[0] - lo[0]).max(f32::MIN_POSITIVE),
+        (hi[1] - lo[1]).max(f32::MIN_POSITIVE),
+    ];
     let to_px = |u: f32, v: f32| {
         let x = ((u - lo[0]) / span[0] * (side - 1) as f32).clamp(0.0, (side - 1) as f32) as u32;
         let y = ((v - lo[1]) / span[1] * (side - 1) as f32).clamp(0.0, (side - 1) as f32) as u32;

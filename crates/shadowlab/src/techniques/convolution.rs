@@ -411,13 +411,17 @@ impl ShadowTechnique for Convolution {
                 }
             }
             "scale" => self.scale = check_range(t, key, parse_value(t, key, value)?, 0.01, 100.0)?,
-            "precision" => self.precision = match value.trim().to_ascii_lowercase().as_str() {
-                "u8" | "8" | "8bit" => Precision::U8,
-                "f32" | "32" | "float" => Precision::F32,
-                _ => return Err(Error::param(format!(
+            "precision" => {
+                self.precision = match value.trim().to_ascii_lowercase().as_str() {
+                    "u8" | "8" | "8bit" => Precision::U8,
+                    "f32" | "32" | "float" => Precision::F32,
+                    _ => {
+                        return Err(Error::param(format!(
                     "csm.precision = {value:?}: use u8 (8-bit basis images, the paper's) or f32"
-                ))),
-            },
+                )))
+                    }
+                }
+            }
             _ => return Err(unknown_param(t, key, KEYS)),
         }
         Ok(())

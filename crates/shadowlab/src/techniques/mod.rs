@@ -46,7 +46,12 @@ pub struct Frame<'a> {
 
 impl<'a> Frame<'a> {
     /// A still frame.
-    pub fn new(scene: &'a Scene, camera: &'a Camera, light: &'a Light, view: &'a ViewSamples) -> Self {
+    pub fn new(
+        scene: &'a Scene,
+        camera: &'a Camera,
+        light: &'a Light,
+        view: &'a ViewSamples,
+    ) -> Self {
         Frame {
             scene,
             camera,
@@ -61,7 +66,10 @@ impl<'a> Frame<'a> {
     /// way (see [`Light::illuminates`]).
     #[inline]
     pub fn receiver_lit(&self, k: usize) -> bool {
-        self.view.covered(k) && self.light.illuminates(self.view.position[k], self.view.normal[k])
+        self.view.covered(k)
+            && self
+                .light
+                .illuminates(self.view.position[k], self.view.normal[k])
     }
 }
 
@@ -103,7 +111,8 @@ impl Stats {
     pub fn stage<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
         let t0 = std::time::Instant::now();
         let r = f();
-        self.stages_ms.push((name.to_string(), t0.elapsed().as_secs_f64() * 1e3));
+        self.stages_ms
+            .push((name.to_string(), t0.elapsed().as_secs_f64() * 1e3));
         r
     }
 
@@ -136,7 +145,9 @@ pub trait ShadowTechnique: Send {
 }
 
 /// Every technique name, in the order reports list them.
-pub const ALL: &[&str] = &["raytrace", "sm", "pcf", "psm", "asm", "afsm", "subpixel", "csm", "vsm"];
+pub const ALL: &[&str] = &[
+    "raytrace", "sm", "pcf", "psm", "asm", "afsm", "subpixel", "csm", "vsm",
+];
 
 /// A technique by name, with default parameters.
 pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
@@ -178,7 +189,13 @@ pub fn parse_value<T: std::str::FromStr>(technique: &str, key: &str, value: &str
 }
 
 /// Checks `value` lies in `lo..=hi` for `technique.key`.
-pub fn check_range<T: PartialOrd + std::fmt::Display + Copy>(technique: &str, key: &str, value: T, lo: T, hi: T) -> Result<T> {
+pub fn check_range<T: PartialOrd + std::fmt::Display + Copy>(
+    technique: &str,
+    key: &str,
+    value: T,
+    lo: T,
+    hi: T,
+) -> Result<T> {
     if value >= lo && value <= hi {
         Ok(value)
     } else {

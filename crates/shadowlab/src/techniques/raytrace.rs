@@ -31,7 +31,15 @@ impl ShadowTechnique for RayTrace {
 
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
         match key {
-            "spp" => self.spp = check_range("raytrace", key, parse_value("raytrace", key, value)?, 1, 1024)?,
+            "spp" => {
+                self.spp = check_range(
+                    "raytrace",
+                    key,
+                    parse_value("raytrace", key, value)?,
+                    1,
+                    1024,
+                )?
+            }
             _ => return Err(unknown_param("raytrace", key, &["spp"])),
         }
         Ok(())

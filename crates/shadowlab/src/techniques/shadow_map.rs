@@ -16,7 +16,9 @@
 //! Known artifacts: acne where the bias is too small for the slope, peter-panning where it
 //! is too large, and the blocky edges of magnified texels.
 
-use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility};
+use super::{
+    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
+};
 use crate::error::{Error, Result};
 use crate::light::{cube_face, light_views, Light, LightView};
 use crate::math::Vec3;
@@ -116,7 +118,10 @@ pub fn render_depth_map(scene: &Scene, view: &LightView, res: u32) -> DepthBuffe
     let lv = view.light_from_world;
     let setups = raster::setup(scene.len(), res, res, |i| {
         let t = scene.triangle(i);
-        (t.map(|p| m * p.extend(1.0)), t.map(|p| -lv.transform_point3(p).z))
+        (
+            t.map(|p| m * p.extend(1.0)),
+            t.map(|p| -lv.transform_point3(p).z),
+        )
     });
     raster::depth_buffer(&setups, res, res)
 }
@@ -124,8 +129,16 @@ pub fn render_depth_map(scene: &Scene, view: &LightView, res: u32) -> DepthBuffe
 /// The views and maps of `light` for this frame, fitted to the visible receivers.
 pub fn render_light_maps(frame: &Frame, res: u32) -> LightMaps {
     let receivers = frame.view.receiver_bounds();
-    let views = light_views(frame.light, &receivers, &frame.scene.bounds, DIRECTIONAL_PAD);
-    let maps = views.iter().map(|v| render_depth_map(frame.scene, v, res)).collect();
+    let views = light_views(
+        frame.light,
+        &receivers,
+        &frame.scene.bounds,
+        DIRECTIONAL_PAD,
+    );
+    let maps = views
+        .iter()
+        .map(|v| render_depth_map(frame.scene, v, res))
+        .collect();
     LightMaps {
         views,
         maps,
@@ -246,8 +259,12 @@ impl ShadowTechnique for ShadowMap {
         match key {
             "resolution" => self.resolution = check_resolution(t, parse_value(t, key, value)?)?,
             "bias" => self.bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?,
-            "slope-bias" => self.slope_bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?,
-            "kernel" if self.kernel > 0 => self.kernel = check_range(t, key, parse_value(t, key, value)?, 1, 15)?,
+            "slope-bias" => {
+                self.slope_bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?
+            }
+            "kernel" if self.kernel > 0 => {
+                self.kernel = check_range(t, key, parse_value(t, key, value)?, 1, 15)?
+            }
             _ => {
                 let known: &[&str] = if self.kernel > 0 {
                     &["resolution", "bias", "slope-bias", "kernel"]
@@ -280,14 +297,25 @@ impl ShadowTechnique for ShadowMap {
                 .with_min_len(1024)
                 .map(|k| {
                     if !frame.receiver_lit(k) {
-                        return if view.covered(k) { Vec3::ZERO } else { Vec3::ONE };
+                        return if view.covered(k) {
+                            Vec3::ZERO
+                        } else {
+                            Vec3::ONE
+                        };
                     }
                     let p = view.position[k];
                     let i = maps.select(frame.light, p);
                     let lv = &maps.views[i];
                     let s = lv.project(p);
                     let (l, _) = frame.light.shadow_ray(p);
-                    let d = s.depth - receiver_bias(lv.texel_size(res, s.depth), view.normal[k], l, bias, slope);
+                    let d = s.depth
+                        - receiver_bias(
+                            lv.texel_size(res, s.depth),
+                            view.normal[k],
+                            l,
+                            bias,
+                            slope,
+                        );
                     let lit = if kernel == 0 {
                         lookup_nearest(&maps.maps[i], s.u, s.v, d)
                     } else {
