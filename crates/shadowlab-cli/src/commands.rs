@@ -305,8 +305,11 @@ pub fn write_json(path: &Path, v: &Value) -> Result<()> {
     std::fs::write(path, text + "\n").with_context(|| format!("cannot write {}", path.display()))
 }
 
+/// One planned run of `compare`: technique name, label, and its parameters.
+type PlannedRun = (String, String, Vec<(String, String)>);
+
 /// Expands `--techniques` and `--sweep` into labelled runs with their parameters.
-fn plan_runs(a: &CompareArgs) -> Result<Vec<(String, String, Vec<(String, String)>)>> {
+fn plan_runs(a: &CompareArgs) -> Result<Vec<PlannedRun>> {
     let names: Vec<String> = if a.techniques.trim() == "all" {
         techniques::ALL.iter().map(|s| s.to_string()).collect()
     } else {

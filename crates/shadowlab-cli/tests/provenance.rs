@@ -118,13 +118,9 @@ fn exported_scene_retraced_from_recorded_camera_and_light_gives_the_same_shadow_
         let frame = Frame::new(&scene, &camera, &light, &view);
         let ours = Reference::build(&scene).visibility(&frame, &[vec2(0.5, 0.5)]);
         let mut compared = 0;
-        for k in 0..covered.len() {
-            assert_eq!(
-                covered[k],
-                view.covered(k),
-                "{spec}: coverage differs at pixel {k}"
-            );
-            if covered[k] {
+        for (k, &c) in covered.iter().enumerate() {
+            assert_eq!(c, view.covered(k), "{spec}: coverage differs at pixel {k}");
+            if c {
                 assert_eq!(
                     ours.value[k], recorded.value[k],
                     "{spec}: shadow term differs at pixel {k}"

@@ -114,7 +114,7 @@ impl Light {
     /// geometry.
     pub fn illuminates(&self, p: Vec3, n: Vec3) -> bool {
         let (l, dist) = self.shadow_ray(p);
-        if !(dist > 0.0) || n.dot(l) <= 0.0 {
+        if dist.is_nan() || dist <= 0.0 || n.dot(l) <= 0.0 {
             return false;
         }
         match *self {

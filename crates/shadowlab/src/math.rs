@@ -233,44 +233,6 @@ pub fn orient2d_i64(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> i64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn watertight_shared_edge_is_hit_once_or_twice_never_missed() {
-        // Rays through the shared diagonal of a quad must hit at least one triangle.
-        let q = [
-            vec3(0.0, 0.0, 0.0),
-            vec3(1.0, 0.0, 0.0),
-            vec3(1.0, 1.0, 0.0),
-            vec3(0.0, 1.0, 0.0),
-        ];
-        for i in 0..1000 {
-            let s = i as f32 / 1000.0;
-            let o = vec3(s, s, 1.0);
-            let d = vec3(0.0, 0.0, -1.0);
-            let a = intersect_triangle(o, d, 0.0, f32::INFINITY, [q[0], q[1], q[2]]);
-            let b = intersect_triangle(o, d, 0.0, f32::INFINITY, [q[0], q[2], q[3]]);
-            assert!(a.is_some() || b.is_some(), "ray {s} slipped through");
-        }
-    }
-
-    #[test]
-    fn plane_intersection_matches_triangle_intersection_inside() {
-        let v = [
-            vec3(0.0, 0.0, 0.0),
-            vec3(2.0, 0.0, 0.0),
-            vec3(0.0, 2.0, 1.0),
-        ];
-        let o = vec3(0.3, 0.4, 5.0);
-        let d = vec3(0.01, -0.02, -1.0);
-        let a = intersect_triangle(o, d, 0.0, f32::INFINITY, v).unwrap();
-        let b = intersect_plane(o, d, v).unwrap();
-        assert!((a.t - b.t).abs() < 1e-5);
-    }
-}
-
 /// World-to-view matrix of an eye at `eye` looking at `target`: right-handed view space,
 /// looking down −Z with +Y up.
 pub fn look_at_rh(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
@@ -310,4 +272,42 @@ pub fn orthographic_rh(left: f32, right: f32, bottom: f32, top: f32, near: f32, 
         vec4(0.0, 0.0, r, 0.0),
         vec4(-(left + right) * rw, -(top + bottom) * rh, r * near, 1.0),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn watertight_shared_edge_is_hit_once_or_twice_never_missed() {
+        // Rays through the shared diagonal of a quad must hit at least one triangle.
+        let q = [
+            vec3(0.0, 0.0, 0.0),
+            vec3(1.0, 0.0, 0.0),
+            vec3(1.0, 1.0, 0.0),
+            vec3(0.0, 1.0, 0.0),
+        ];
+        for i in 0..1000 {
+            let s = i as f32 / 1000.0;
+            let o = vec3(s, s, 1.0);
+            let d = vec3(0.0, 0.0, -1.0);
+            let a = intersect_triangle(o, d, 0.0, f32::INFINITY, [q[0], q[1], q[2]]);
+            let b = intersect_triangle(o, d, 0.0, f32::INFINITY, [q[0], q[2], q[3]]);
+            assert!(a.is_some() || b.is_some(), "ray {s} slipped through");
+        }
+    }
+
+    #[test]
+    fn plane_intersection_matches_triangle_intersection_inside() {
+        let v = [
+            vec3(0.0, 0.0, 0.0),
+            vec3(2.0, 0.0, 0.0),
+            vec3(0.0, 2.0, 1.0),
+        ];
+        let o = vec3(0.3, 0.4, 5.0);
+        let d = vec3(0.01, -0.02, -1.0);
+        let a = intersect_triangle(o, d, 0.0, f32::INFINITY, v).unwrap();
+        let b = intersect_plane(o, d, v).unwrap();
+        assert!((a.t - b.t).abs() < 1e-5);
+    }
 }

@@ -167,7 +167,7 @@ fn setup_one(
     ];
     let mut inside_all = true;
     for p in &planes {
-        let ds = clip.map(|c| p(c));
+        let ds = clip.map(p);
         if ds.iter().all(|&x| x < 0.0) {
             return;
         }
@@ -516,7 +516,7 @@ mod tests {
             let n = 2 + (trial % 7) * 3;
             let tris = tessellated_quad(&mut rng, n);
             // A random rotation and a perspective view that keeps the whole quad in view.
-            let angle = rng.next() * 6.28;
+            let angle = rng.next() * std::f32::consts::TAU;
             let tilt = (rng.next() - 0.5) * 1.2;
             let world = Mat4::from_rotation_z(angle) * Mat4::from_rotation_x(tilt);
             let eye = vec3(0.0, 0.0, 5.0);

@@ -49,7 +49,7 @@ pub fn pattern(kind: PatternKind, n: u32) -> Result<Vec<Vec2>> {
     }
     // The most square factorization a × b = n with a ≥ b.
     let mut b = (n as f64).sqrt() as u32;
-    while n % b != 0 {
+    while !n.is_multiple_of(b) {
         b -= 1;
     }
     let a = n / b;

@@ -424,8 +424,8 @@ fn point_light_on_a_face_boundary_and_casters_through_its_planes() {
         dark > 1000 && dark < expected.len() - 1000,
         "{dark} dark pixels"
     );
-    for k in 0..expected.len() {
-        assert_eq!(shadows.visibility.value[k], expected[k], "pixel {k}");
+    for (k, e) in expected.iter().enumerate() {
+        assert_eq!(shadows.visibility.value[k], *e, "pixel {k}");
     }
 }
 
@@ -460,7 +460,7 @@ fn identical_for_any_thread_count_and_leaf_size() {
             let other = run(2, leaf);
             assert_eq!(one.visibility, other.visibility, "leaf size {leaf}");
         }
-        assert!(one.visibility.value.iter().any(|v| *v == Vec3::ZERO));
+        assert!(one.visibility.value.contains(&Vec3::ZERO));
     }
 }
 

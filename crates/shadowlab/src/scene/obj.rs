@@ -66,7 +66,7 @@ fn build(
         let positions: Vec<Vec3> = mesh
             .positions
             .chunks_exact(3)
-            .map(|c| vec3(c[0] as f32, c[1] as f32, c[2] as f32))
+            .map(|c| vec3(c[0], c[1], c[2]))
             .collect();
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
             return Err(Error::format(
@@ -130,10 +130,10 @@ fn check_faces(path: &Path) -> Result<()> {
 fn convert(m: &tobj::Material) -> Material {
     let color = m
         .diffuse
-        .map(|d| vec3(d[0] as f32, d[1] as f32, d[2] as f32))
+        .map(|d| vec3(d[0], d[1], d[2]))
         .unwrap_or(Vec3::splat(0.8))
         .clamp(Vec3::ZERO, Vec3::ONE);
-    let mut opacity = m.dissolve.map(|d| d as f32).unwrap_or(1.0);
+    let mut opacity = m.dissolve.unwrap_or(1.0);
     if let Some(tr) = m
         .unknown_param
         .get("Tr")
