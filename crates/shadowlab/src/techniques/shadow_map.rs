@@ -316,6 +316,11 @@ impl ShadowTechnique for ShadowMap {
                             bias,
                             slope,
                         );
+                    if !(s.u.is_finite() && s.v.is_finite() && d.is_finite()) {
+                        // A receiver whose light-space position overflows f32 (found by
+                        // fuzzing extreme coordinates) has no texel to compare with.
+                        return Vec3::ONE;
+                    }
                     let lit = if kernel == 0 {
                         lookup_nearest(&maps.maps[i], s.u, s.v, d)
                     } else {
