@@ -274,6 +274,28 @@ pub fn orthographic_rh(left: f32, right: f32, bottom: f32, top: f32, near: f32, 
     )
 }
 
+/// A tiny seeded generator for the library's unit tests (no extra crate, same sequence
+/// on every machine).
+#[cfg(test)]
+pub(crate) struct TestRng(pub(crate) u64);
+
+#[cfg(test)]
+impl TestRng {
+    /// Uniform in [0, 1).
+    pub(crate) fn next(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+
+    /// Uniform in [-1, 1)³.
+    pub(crate) fn v(&mut self) -> Vec3 {
+        vec3(self.next(), self.next(), self.next()) * 2.0 - 1.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -460,17 +460,7 @@ mod tests {
     use super::*;
     use crate::math::{vec3, Mat4, Vec3};
 
-    /// A tiny deterministic generator so the tests need no extra crate.
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f32 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-        }
-    }
+    use crate::math::TestRng as Lcg;
 
     fn tessellated_quad(rng: &mut Lcg, n: usize) -> Vec<[Vec3; 3]> {
         // A grid of jittered vertices over [-1,1]², split into triangles along random

@@ -1520,21 +1520,9 @@ fn rasterize(frame: &Frame, trees: &[Bsp]) -> (Visibility, Counters) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::{intersect_triangle, vec3};
+    use crate::math::intersect_triangle;
 
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f32 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-        }
-        fn v(&mut self) -> Vec3 {
-            vec3(self.next(), self.next(), self.next()) * 2.0 - 1.0
-        }
-    }
+    use crate::math::TestRng as Lcg;
 
     #[test]
     fn presheared_ray_test_is_the_watertight_test() {
