@@ -19,8 +19,8 @@ use obvhs::ray::Ray;
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// The size the scene is scaled to (by a power of two) for the BVH. `obvhs`'s node test
-/// starts every ray at `t = 1e-4` whatever the units, which skips casters that close to a
+/// The largest coordinate magnitude the scene is scaled to (by a power of two) for the
+/// BVH. `obvhs`'s node test starts every ray at `t = 1e-4` whatever the units, which skips casters that close to a
 /// shadow ray's origin (a whole scene at a scale of 1e-4); at this size the cut-off is far
 /// below the f32 resolution of the coordinates. Scaling by a power of two is exact, so the
 /// culling is otherwise that of the scene's own units.
@@ -51,9 +51,19 @@ impl<'s> Reference<'s> {
     /// Builds the BVH over every triangle of `scene`.
     pub fn build(scene: &'s Scene) -> Self {
         let t0 = Instant::now();
-        let diagonal = scene.bounds.diagonal();
-        let bvh_scale = if diagonal > 0.0 && diagonal.is_finite() {
-            2f32.powi(((BVH_EXTENT / diagonal).log2().floor() as i32).clamp(-100, 100))
+        // The largest coordinate magnitude, not the diagonal: the diagonal of a scene
+        // with a vertex near f32::MAX overflows, and obvhs's surface-area costs overflow
+        // (and corrupt its build) long before that. Every scaled coordinate is at most
+        // BVH_EXTENT, so node areas stay finite, and the t = 1e-4 cut-off is a relative
+        // 1e-10 of the largest coordinate, below its f32 resolution.
+        let largest = scene
+            .bounds
+            .min
+            .abs()
+            .max(scene.bounds.max.abs())
+            .max_element();
+        let bvh_scale = if largest > 0.0 && largest.is_finite() {
+            2f32.powi(((BVH_EXTENT / largest).log2().floor() as i32).clamp(-126, 126))
         } else {
             1.0
         };
