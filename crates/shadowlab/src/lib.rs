@@ -38,11 +38,15 @@
 //! let shadows = technique.render(&frame).unwrap();
 //! assert_eq!(shadows.visibility.width, 64);
 //! ```
-#![forbid(unsafe_code)]
+#![cfg_attr(not(feature = "embree"), forbid(unsafe_code))]
+#![cfg_attr(feature = "embree", deny(unsafe_code))]
 #![warn(missing_docs)]
 
 pub mod camera;
 pub mod compare;
+#[cfg(feature = "embree")]
+#[allow(unsafe_code)]
+pub mod embree;
 pub mod error;
 pub mod light;
 pub mod math;

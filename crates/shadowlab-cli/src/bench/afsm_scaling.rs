@@ -1,7 +1,9 @@
 //! `afsm-scaling`: the alias-free shadow map paper's Table 1 — 1K, 10K, 100K and 1M random
 //! triangles of constant total area (the built-in `random-triangles` scene), 1024×768, its
 //! own camera and light — with the ray-traced reference timed in the same run on the same
-//! view samples: BVH build and shadow-ray trace reported separately.
+//! view samples: BVH build and shadow-ray trace reported separately. Built with the cargo
+//! feature `embree`, Intel Embree 3's BVH build and occlusion rays (`rtcOccluded1`) over the
+//! same scene and samples are timed too, with their agreement with the reference.
 //!
 //! `afsm` times are the technique's own frame (transform, BSP, rasterization); the camera
 //! pass, shared by every technique, is excluded, as the paper's table excludes it. Each
@@ -75,6 +77,53 @@ struct Column {
     mismatch_rate: f64,
     covered: usize,
     last: Shadows,
+    embree: Option<EmbreeTimes>,
+}
+
+/// Intel Embree's BVH build and occlusion rays over the same scene and samples.
+struct EmbreeTimes {
+    build_ms: f64,
+    trace_ms: f64,
+    /// Share of covered pixels where Embree's answer differs from the reference.
+    mismatch_rate: f64,
+}
+
+#[cfg(feature = "embree")]
+fn measure_embree(
+    scene: &shadowlab::scene::Scene,
+    frame: &Frame,
+    truth: &shadowlab::techniques::Visibility,
+    repeat: usize,
+) -> Result<Option<EmbreeTimes>> {
+    use shadowlab::embree::EmbreeScene;
+    let mut builds = Vec::new();
+    let mut traces = Vec::new();
+    let mut last = None;
+    for _ in 0..repeat.max(1) {
+        let e = EmbreeScene::build(scene, rayon::current_num_threads())?;
+        builds.push(e.build_ms);
+        let t0 = Instant::now();
+        let v = e.visibility(frame);
+        traces.push(t0.elapsed().as_secs_f64() * 1e3);
+        last = Some(v);
+    }
+    let v = last.expect("at least one trace");
+    let m = compare(frame.view, &v, truth);
+    Ok(Some(EmbreeTimes {
+        build_ms: median(builds),
+        trace_ms: median(traces),
+        mismatch_rate: m.mismatch_rate,
+    }))
+}
+
+#[cfg(not(feature = "embree"))]
+fn measure_embree(
+    _: &shadowlab::scene::Scene,
+    _: &Frame,
+    _: &shadowlab::techniques::Visibility,
+    _: usize,
+) -> Result<Option<EmbreeTimes>> {
+    Ok(None)
 }
 
 fn measure(count: usize, repeat: usize) -> Result<Column> {
@@ -119,6 +168,7 @@ fn measure(count: usize, repeat: usize) -> Result<Column> {
     }
     let truth = truth.expect("at least one trace");
     let m = compare(&view, &last.visibility, &truth);
+    let embree = measure_embree(&scene, &frame, &truth, repeat)?;
     Ok(Column {
         triangles: count,
         afsm_ms,
@@ -130,6 +180,7 @@ fn measure(count: usize, repeat: usize) -> Result<Column> {
         mismatch_rate: m.mismatch_rate,
         covered: m.covered_pixels,
         last,
+        embree,
     })
 }
 
@@ -221,6 +272,24 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
             format!("{:.2}", c.afsm_ms / (c.bvh_build_ms + c.trace_ms)),
         )
     });
+    let embree = |c: &Column, f: &dyn Fn(&EmbreeTimes) -> String| {
+        ("-".to_string(), c.embree.as_ref().map_or("-".into(), f))
+    };
+    if cols.iter().any(|c| c.embree.is_some()) {
+        line("Embree BVH build ms", &|c| embree(c, &|e| ms(e.build_ms)));
+        line("Embree trace ms", &|c| embree(c, &|e| ms(e.trace_ms)));
+        line("afsm / Embree trace", &|c| {
+            embree(c, &|e| format!("{:.2}", c.afsm_ms / e.trace_ms))
+        });
+        line("afsm / Embree (build + trace)", &|c| {
+            embree(c, &|e| {
+                format!("{:.2}", c.afsm_ms / (e.build_ms + e.trace_ms))
+            })
+        });
+        line("Embree mismatch vs reference", &|c| {
+            embree(c, &|e| format!("{:.5}%", e.mismatch_rate * 100.0))
+        });
+    }
     line("Mismatch vs reference", &|c| {
         ("-".into(), format!("{:.5}%", c.mismatch_rate * 100.0))
     });
@@ -231,6 +300,11 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
         )
     });
 
+    if cols.iter().all(|c| c.embree.is_none()) {
+        println!(
+            "Embree: not timed (build with `--features embree`, which needs Debian's libembree-dev)"
+        );
+    }
     println!("\ntargets:");
     for c in &cols {
         let speedup = PAPER[paper_col(c)][7] / c.afsm_ms;
@@ -283,7 +357,9 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
                 "raster_ms": c.raster_ms,
                 "bvh_build_ms": c.bvh_build_ms,
                 "trace_ms": c.trace_ms,
-                "embree_ms": null,
+                "embree_build_ms": c.embree.as_ref().map(|e| e.build_ms),
+                "embree_trace_ms": c.embree.as_ref().map(|e| e.trace_ms),
+                "embree_mismatch_rate": c.embree.as_ref().map(|e| e.mismatch_rate),
                 "paper_total_ms": p[7],
                 "paper_transform_ms": p[4],
                 "paper_bsp_ms": p[5],
