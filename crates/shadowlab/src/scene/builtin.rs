@@ -648,6 +648,12 @@ const MAX_FENCE_DISTANCE: f32 = 100.0;
 /// The camera distance factor of `fence-far`: far enough that the fence's scrollwork is
 /// well below a pixel (the minification the convolution shadow map paper filters).
 const FENCE_FAR_DISTANCE: f32 = 5.0;
+/// Half extents (x, z) of `fence-far`'s ground, in centimetres: the yard in front of the
+/// wall, from its back (z = −100) to 2 m in front of the fence, wide and deep enough to fill
+/// the frame below the wall at distance factor 1.
+const FENCE_YARD_HALF: (f32, f32) = (350.0, 150.0);
+/// Centre (z) of `fence-far`'s ground.
+const FENCE_YARD_CENTER_Z: f32 = 50.0;
 /// The camera distances (factors) of the fence scenes' pull-away camera path.
 const FENCE_PATH_DISTANCES: [f32; 5] = [1.0, 2.0, 4.0, 8.0, 16.0];
 
@@ -667,7 +673,24 @@ fn fence(p: &Params, far: bool) -> Result<Scene> {
     let wall = s.add_material(Material::opaque("wall", vec3(0.80, 0.74, 0.66)));
     let crate_ = s.add_material(Material::opaque("boxes", vec3(0.70, 0.52, 0.32)));
     let stone = s.add_material(Material::opaque("stone", vec3(0.62, 0.64, 0.68)));
-    add_plane(&mut s, vec3(0.0, 0.0, -2000.0), 10_000.0, 10_000.0, ground);
+    if far {
+        // A bounded yard instead of the 100 m ground: the light's map is fitted to the visible
+        // receivers, so with the ground to the horizon in view its texels would be 5 cm and
+        // the fence's scrollwork would be magnified in light space however far the camera
+        // is. Round the wall, fence and boxes only, the map's texels are a few millimetres and
+        // the scrollwork is minified in light space as on screen (many texels per pixel). The
+        // yard ends at the wall, so the wall's long shadow under the low sun falls off it and
+        // the shadows in view span the fence's depths, not the wall's.
+        add_plane(
+            &mut s,
+            vec3(0.0, 0.0, FENCE_YARD_CENTER_Z),
+            FENCE_YARD_HALF.0,
+            FENCE_YARD_HALF.1,
+            ground,
+        );
+    } else {
+        add_plane(&mut s, vec3(0.0, 0.0, -2000.0), 10_000.0, 10_000.0, ground);
+    }
     // A wall behind, boxes and a low column between it and the fence.
     add_box(
         &mut s,

@@ -28,10 +28,11 @@
 //!   smallest `t > 0` where the attenuated reconstruction of the step first comes within
 //!   [`OFFSET_PLATEAU_TOLERANCE`] of its plateau (`min(1, max g)`), so a surface that is
 //!   its own occluder (`z = d`) is lit, whatever `M` and `α`.
-//! - Depths are normalized over the interval from the nearest map texel inside the visible
-//!   receivers' light-space footprint to the farthest visible receiver
+//! - Depths are normalized over the interval from the nearest map texel under the filter
+//!   support of a visible receiver that something may shadow to the farthest such receiver
 //!   ([`super::filtering::DepthRange::fitted`]; the paper asks for a tightly fitted light
-//!   frustum; clamping outside it keeps every visible receiver's test), into `[0, 1 − 2·offset]` rather than `[0, 1]`:
+//!   frustum; clamping outside it keeps every receiver's test, and receivers that nothing can
+//!   shadow stay lit), into `[0, 1 − 2·offset]` rather than `[0, 1]`:
 //!   the series is periodic with period 2 and the offset shifts `z − d` up, so without
 //!   that margin a receiver far in front of its neighbours' depths (`z − d + offset` near
 //!   or past 1) would fall on the next period's step and turn dark.
@@ -441,6 +442,7 @@ impl ShadowTechnique for Convolution {
                 value,
             },
             stats,
+            layers: None,
         })
     }
 }

@@ -24,6 +24,10 @@
 //!   of the world-space step to the next pixel (the GPU's `ddx/ddy`); for a perspective
 //!   light the symmetric difference cancels the projection's curvature to first order.
 //!
+//! - [`ReceiverDepths`] and [`DepthRange::fitted`]: the depth interval a map is normalized
+//!   over, fitted to the receivers that may be shadowed (some texel under their filter
+//!   support, found with a [`MinPyramid`], is nearer than their own tangent plane there).
+//!
 //! Invariants: every pass is a pure function of its input, computed per row in parallel
 //! and collected in order, so results are bit-identical for any thread count; filter
 //! weights of every look-up sum to one, so a constant texture samples to that constant.
@@ -814,55 +818,33 @@ impl DepthRange {
         MIN_RANGE_RELATIVE * near.abs().max(far.abs()).max(f32::MIN_POSITIVE.sqrt())
     }
 
-    /// The depth interval that matters to the receivers this frame shades: from the nearest
-    /// map texel inside the receivers' light-space footprint (widened by `pad` texels for
-    /// the filters' support) to the farthest receiver. Normalizing with clamping is monotone,
-    /// so the shadow test `z < d` of every visible receiver keeps its sign: a texel nearer
-    /// than `near` lies outside the footprint and stays in front, one farther than `far`
-    /// lies behind every receiver and stays behind. The tighter interval is what the
-    /// convolution shadow map paper asks of the light frustum ("tightly fitted"): it shrinks
-    /// the offset and the smooth step's half-width in world units. It is never narrower
-    /// than [`MIN_RANGE_RELATIVE`] of the depths, so receivers at a single light depth (a
-    /// point light's cube face looking straight down at a floor) are not normalized by their
-    /// rounding error. Falls back to [`Self::of_map`] when the view shades no receiver.
+    /// The depth interval that matters to the receivers this frame shades (see
+    /// [`ReceiverDepths`]): from the nearest map texel under the filter support of a receiver
+    /// that something may shadow to the farthest such receiver. Normalizing with clamping is
+    /// monotone, so the shadow test `z < d` of every such receiver keeps its sign: no texel
+    /// under its support is nearer than `near`, and a texel farther than `far` lies behind it
+    /// and stays behind. A receiver left out has no texel under its support nearer than its
+    /// own surface there, so it is lit, and stays lit after clamping: beyond `far` it and its
+    /// whole support clamp onto `span` (`z − d = 0`, lit once offset); before `near` it clamps
+    /// onto 0 and its support to `≥ 0`. The tighter interval is what the convolution shadow
+    /// map paper asks of the light frustum ("tightly fitted"): it shrinks the offset and the
+    /// smooth step's half-width in world units. It is never narrower than
+    /// [`MIN_RANGE_RELATIVE`] of the depths, so receivers at a single light depth (a point
+    /// light's cube face looking straight down at a floor) are not normalized by their
+    /// rounding error. Where no receiver may be shadowed, it spans every receiver and its
+    /// support; it falls back to [`Self::of_map`] when the view shades no receiver.
     pub fn fitted(
         map: &DepthBuffer,
         view: &LightView,
-        receivers: &ReceiverFootprint,
-        pad: u32,
+        receivers: &ReceiverDepths,
         span: f32,
     ) -> Self {
-        if receivers.count == 0 || map.width == 0 || map.height == 0 {
-            return Self::of_map(map, view, span);
-        }
-        let texel = |t: f32, n: u32, round_up: bool| -> u32 {
-            let f = t.clamp(0.0, 1.0) * n as f32;
-            let i = if round_up {
-                f.ceil() as i64 + pad as i64
-            } else {
-                f.floor() as i64 - pad as i64
-            };
-            i.clamp(0, n as i64) as u32
+        let (near, far) = if receivers.shadowable > 0 {
+            (receivers.shadowable_near, receivers.shadowable_far)
+        } else {
+            (receivers.near, receivers.far)
         };
-        let (x0, x1) = (
-            texel(receivers.u.0, map.width, false),
-            texel(receivers.u.1, map.width, true),
-        );
-        let (y0, y1) = (
-            texel(receivers.v.0, map.height, false),
-            texel(receivers.v.1, map.height, true),
-        );
-        let mut near = f32::INFINITY;
-        for y in y0..y1 {
-            let row = &map.depth[(y * map.width) as usize..((y + 1) * map.width) as usize];
-            for &d in &row[x0 as usize..x1 as usize] {
-                if d.is_finite() {
-                    near = near.min(d);
-                }
-            }
-        }
-        let far = receivers.far;
-        if !near.is_finite() || !far.is_finite() || near > far {
+        if receivers.count == 0 || !near.is_finite() || !far.is_finite() || near > far {
             return Self::of_map(map, view, span);
         }
         // Receivers that all lie at one light depth (a plane facing the light head-on) give
@@ -901,69 +883,224 @@ pub const MIN_RANGE_RELATIVE: f32 = 1e-3;
 /// keeps the extreme depths off the clamped ends at the cost of 1% of the precision.
 pub const FITTED_RANGE_SLACK: f32 = 0.005;
 
-/// Where the receivers a light view shades fall in it: the bounds of their map coordinates
-/// and their farthest light depth.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ReceiverFootprint {
-    /// Smallest and largest `u`.
-    pub u: (f32, f32),
-    /// Smallest and largest `v`.
-    pub v: (f32, f32),
-    /// Farthest linear light depth.
-    pub far: f32,
-    /// Number of receivers.
-    pub count: u64,
+/// Steepest receiver slope (tangent of its angle to the light's image plane) whose own
+/// depth change across its filter support [`ReceiverDepths`] accounts for; a steeper
+/// receiver always counts as one that may be shadowed (conservative: it only widens the
+/// fitted interval).
+pub const MAX_RECEIVER_SLOPE: f32 = 8.0;
+
+/// A min-depth pyramid of a depth map: level `l` texel `(i, j)` is the nearest depth of the
+/// level-0 texels `[i·2^l, (i+1)·2^l) × [j·2^l, (j+1)·2^l)` (`+inf` where empty), so the
+/// nearest depth of any texel rectangle is bounded from below by at most 2×2 reads.
+#[derive(Clone, Debug)]
+pub struct MinPyramid {
+    /// `(width, height, depths)` of each level, level 0 first.
+    pub levels: Vec<(u32, u32, Vec<f32>)>,
 }
 
-impl ReceiverFootprint {
-    const EMPTY: ReceiverFootprint = ReceiverFootprint {
-        u: (f32::INFINITY, f32::NEG_INFINITY),
-        v: (f32::INFINITY, f32::NEG_INFINITY),
+impl MinPyramid {
+    /// The pyramid of `map`, down to 1×1 (each level `⌈side / 2⌉`).
+    pub fn build(map: &DepthBuffer) -> Self {
+        let mut levels = vec![(map.width, map.height, map.depth.clone())];
+        loop {
+            let (w, h, prev) = levels.last().expect("level 0 exists");
+            let (w, h) = (*w as usize, *h as usize);
+            if w <= 1 && h <= 1 {
+                break;
+            }
+            let (nw, nh) = (w.div_ceil(2), h.div_ceil(2));
+            let mut next = vec![f32::INFINITY; nw * nh];
+            if nw > 0 {
+                next.par_chunks_mut(nw).enumerate().for_each(|(y, row)| {
+                    for (x, o) in row.iter_mut().enumerate() {
+                        let mut m = f32::INFINITY;
+                        for sy in (2 * y)..(2 * y + 2).min(h) {
+                            for sx in (2 * x)..(2 * x + 2).min(w) {
+                                m = m.min(prev[sy * w + sx]);
+                            }
+                        }
+                        *o = m;
+                    }
+                });
+            }
+            levels.push((nw as u32, nh as u32, next));
+        }
+        MinPyramid { levels }
+    }
+
+    /// The nearest depth of a block of texels that contains the texel rectangle `[x0, x1] ×
+    /// [y0, y1]` (inclusive, inside level 0): at most 2×2 texels of the finest level whose
+    /// texels cover it so. Returns the depth and the block read, as level-0 texel bounds
+    /// `(x_begin, x_end, y_begin, y_end)` (end exclusive, clamped to the map).
+    pub fn min_in(&self, x0: u32, x1: u32, y0: u32, y1: u32) -> (f32, [u32; 4]) {
+        let mut l = 0;
+        while l + 1 < self.levels.len() && ((x1 >> l) - (x0 >> l) > 1 || (y1 >> l) - (y0 >> l) > 1)
+        {
+            l += 1;
+        }
+        let (w, h, d) = &self.levels[l];
+        let (w, h) = (*w as usize, *h as usize);
+        let (xa, xb) = ((x0 >> l) as usize, ((x1 >> l) as usize).min(w - 1));
+        let (ya, yb) = ((y0 >> l) as usize, ((y1 >> l) as usize).min(h - 1));
+        let mut m = f32::INFINITY;
+        for y in ya..=yb {
+            for x in xa..=xb {
+                m = m.min(d[y * w + x]);
+            }
+        }
+        let (w0, h0) = (self.levels[0].0, self.levels[0].1);
+        let block = [
+            (xa as u32) << l,
+            (((xb + 1) as u32) << l).min(w0),
+            (ya as u32) << l,
+            (((yb + 1) as u32) << l).min(h0),
+        ];
+        (m, block)
+    }
+}
+
+/// The light depths that matter to the receivers of one light view, from which
+/// [`DepthRange::fitted`] takes its interval.
+///
+/// A receiver *may be shadowed* when some map texel under its filter support (the texels its
+/// look-up can read: the footprint's parallelogram, the bilinear and mip-level spill of the
+/// level of detail it uses, and `pad` texels more for the blur) is nearer than its own surface
+/// there: nearer than its depth minus the depth change of its tangent plane across the
+/// support and one texel. A receiver that cannot be shadowed is lit whatever the interval
+/// (see [`DepthRange::fitted`]), so the interval need only cover the others: on a wide
+/// ground under a low sun this is the ground round the casters, not the whole visible ground.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReceiverDepths {
+    /// Nearest texel under the support of any receiver.
+    pub near: f32,
+    /// Farthest receiver.
+    pub far: f32,
+    /// Nearest texel under the support of a receiver that may be shadowed.
+    pub shadowable_near: f32,
+    /// Farthest receiver that may be shadowed.
+    pub shadowable_far: f32,
+    /// Number of receivers.
+    pub count: u64,
+    /// Number of receivers that may be shadowed.
+    pub shadowable: u64,
+}
+
+impl ReceiverDepths {
+    const EMPTY: ReceiverDepths = ReceiverDepths {
+        near: f32::INFINITY,
         far: f32::NEG_INFINITY,
+        shadowable_near: f32::INFINITY,
+        shadowable_far: f32::NEG_INFINITY,
         count: 0,
+        shadowable: 0,
     };
 
-    fn add(mut self, u: f32, v: f32, depth: f32) -> Self {
-        if u.is_finite() && v.is_finite() && depth.is_finite() {
-            self.u = (self.u.0.min(u), self.u.1.max(u));
-            self.v = (self.v.0.min(v), self.v.1.max(v));
-            self.far = self.far.max(depth);
-            self.count += 1;
-        }
-        self
-    }
-
     fn merge(self, o: Self) -> Self {
-        ReceiverFootprint {
-            u: (self.u.0.min(o.u.0), self.u.1.max(o.u.1)),
-            v: (self.v.0.min(o.v.0), self.v.1.max(o.v.1)),
+        ReceiverDepths {
+            near: self.near.min(o.near),
             far: self.far.max(o.far),
+            shadowable_near: self.shadowable_near.min(o.shadowable_near),
+            shadowable_far: self.shadowable_far.max(o.shadowable_far),
             count: self.count + o.count,
+            shadowable: self.shadowable + o.shadowable,
         }
     }
 
-    /// The footprint in each of `views` of the pixels of `frame` the light reaches (the
-    /// point light's cube faces each get the pixels whose direction selects them). Minima
+    /// The depths of each light view for the pixels of `frame` the light reaches (the point
+    /// light's cube faces each get the pixels whose direction selects them), with `maps` the
+    /// views' depth maps and `settings` the look-up filter whose support is checked. Minima
     /// and maxima are exact in any order, so the result does not depend on the thread count.
-    pub fn of_frame(frame: &Frame, views: &[LightView]) -> Vec<Self> {
+    pub fn of_frame(
+        frame: &Frame,
+        views: &[LightView],
+        maps: &[DepthBuffer],
+        settings: &FilterSettings,
+    ) -> Vec<Self> {
         let n = views.len();
+        let pyramids: Vec<MinPyramid> = maps.iter().map(MinPyramid::build).collect();
         let view = frame.view;
+        let pad = settings.blur / 2 + 1;
         (0..view.position.len())
             .into_par_iter()
             .with_min_len(4096)
             .fold(
                 || vec![Self::EMPTY; n],
                 |mut acc, k| {
-                    if frame.receiver_lit(k) {
-                        let p = view.position[k];
-                        let i = match *frame.light {
-                            Light::Point { position } => cube_face(p - position),
-                            _ => 0,
-                        };
-                        if let Some(lv) = views.get(i) {
-                            let s = lv.project(p);
-                            acc[i] = acc[i].add(s.u, s.v, s.depth);
-                        }
+                    if !frame.receiver_lit(k) {
+                        return acc;
+                    }
+                    let p = view.position[k];
+                    let i = match *frame.light {
+                        Light::Point { position } => cube_face(p - position),
+                        _ => 0,
+                    };
+                    let (Some(lv), Some(map), Some(pyr)) =
+                        (views.get(i), maps.get(i), pyramids.get(i))
+                    else {
+                        return acc;
+                    };
+                    if map.width == 0 || map.height == 0 {
+                        return acc;
+                    }
+                    let s = lv.project(p);
+                    if !(s.u.is_finite() && s.v.is_finite() && s.depth.is_finite()) {
+                        return acc;
+                    }
+                    let fp = light_footprint(lv, p, view.dpdx[k], view.dpdy[k]);
+                    let (w, h) = (map.width as f32, map.height as f32);
+                    let lod = level_of_detail(
+                        &fp,
+                        map.width.max(map.height),
+                        settings.filter,
+                        settings.max_aniso,
+                    );
+                    // Half-extents of the support in texels: the probes' parallelogram, the
+                    // bilinear taps of the coarser of the two levels blended (within two of
+                    // its texels, 2^⌈λ⌉ level-0 texels each), the blur.
+                    let level = if lod.lambda.is_finite() {
+                        lod.lambda.clamp(0.0, 30.0).ceil()
+                    } else {
+                        0.0
+                    };
+                    let spill = 2.0 * 2.0f32.powf(level) + pad as f32;
+                    let (ex, ey) = if settings.filter == Filter::Anisotropic {
+                        (
+                            0.5 * (fp.dx.x.abs() + fp.dy.x.abs()) * w,
+                            0.5 * (fp.dx.y.abs() + fp.dy.y.abs()) * h,
+                        )
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    let (hx, hy) = (ex + spill, ey + spill);
+                    let (cx, cy) = (s.u * w, s.v * h);
+                    let clampx = |t: f32| t.clamp(0.0, w - 1.0) as u32;
+                    let clampy = |t: f32| t.clamp(0.0, h - 1.0) as u32;
+                    let (zmin, b) = pyr.min_in(
+                        clampx(fast_floor(cx - hx)),
+                        clampx(fast_floor(cx + hx)),
+                        clampy(fast_floor(cy - hy)),
+                        clampy(fast_floor(cy + hy)),
+                    );
+                    // The receiver's own depth change across the block read (which holds the
+                    // support), from its tangent plane in light space, plus one texel.
+                    let bx = (cx - b[0] as f32).max(b[1] as f32 - cx).max(0.0);
+                    let by = (cy - b[2] as f32).max(b[3] as f32 - cy).max(0.0);
+                    let texel = lv.texel_size(map.width.max(map.height), s.depth);
+                    let nl = lv.light_from_world.transform_vector3(view.normal[k]);
+                    let slope = (nl.x.abs() * bx + nl.y.abs() * by) * texel;
+                    let own = if nl.z.abs() * MAX_RECEIVER_SLOPE >= nl.x.abs().max(nl.y.abs()) {
+                        slope / nl.z.abs() + texel
+                    } else {
+                        f32::NEG_INFINITY
+                    };
+                    let a = &mut acc[i];
+                    a.count += 1;
+                    a.far = a.far.max(s.depth);
+                    a.near = a.near.min(zmin.min(s.depth));
+                    if zmin < s.depth - own {
+                        a.shadowable += 1;
+                        a.shadowable_far = a.shadowable_far.max(s.depth);
+                        a.shadowable_near = a.shadowable_near.min(zmin);
                     }
                     acc
                 },
@@ -1005,16 +1142,25 @@ impl<T: Channel> FilteredMaps<T> {
         encode: impl Fn(&DepthBuffer, &DepthRange, u32, u32, &mut [f32]) + Sync,
     ) -> Self {
         let maps = stats.stage("shadow_map", || render_light_maps(frame, res));
-        let footprints = ReceiverFootprint::of_frame(frame, &maps.views);
-        // The filters read up to the blur radius (plus the bilinear neighbour) beyond the
-        // footprint at level 0.
-        let pad = settings.blur / 2 + 1;
+        let receivers = stats.stage("fit", || {
+            ReceiverDepths::of_frame(frame, &maps.views, &maps.maps, settings)
+        });
+        let (count, shadowable) = receivers
+            .iter()
+            .fold((0, 0), |(c, s), r| (c + r.count, s + r.shadowable));
+        stats.count("shadowable_share", shadowable as f64 / count.max(1) as f64);
+        if let Some(r) = receivers.first() {
+            stats.count("fit_near", r.shadowable_near as f64);
+            stats.count("fit_far", r.shadowable_far as f64);
+            stats.count("receivers_near", r.near as f64);
+            stats.count("receivers_far", r.far as f64);
+        }
         let ranges: Vec<DepthRange> = maps
             .maps
             .iter()
             .zip(&maps.views)
-            .zip(&footprints)
-            .map(|((m, v), f)| DepthRange::fitted(m, v, f, pad, span))
+            .zip(&receivers)
+            .map(|((m, v), r)| DepthRange::fitted(m, v, r, span))
             .collect();
         let encoded: Vec<Texture<T>> = stats.stage("encode", || {
             maps.maps
