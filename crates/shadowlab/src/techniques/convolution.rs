@@ -224,6 +224,26 @@ impl Reconstruction {
         }
         0.5 + sum
     }
+
+    /// [`Self::eval`] of the basis values `scale · raw + bias` (a linear decoding of filtered
+    /// stored codes), without decoding each channel: the sum is linear in the basis, so it is
+    /// `scale · Σ(raw) + bias · Σ(1)` with both sums taken in one pass.
+    #[inline]
+    pub fn eval_encoded(&self, d: f32, raw: &[f32], scale: f32, bias: f32) -> f32 {
+        let mut sc = [0.0f32; 2 * MAX_M as usize];
+        Expansion::sin_cos(self.m, d, &mut sc);
+        let m = self.m as usize;
+        let (mut sum, mut ones) = (0.0, 0.0);
+        for ((w, t), b) in self.weight[..m]
+            .iter()
+            .zip(sc[..2 * m].chunks_exact(2))
+            .zip(raw[..2 * m].chunks_exact(2))
+        {
+            sum += w * (t[1] * b[0] - t[0] * b[1]);
+            ones += w * (t[1] - t[0]);
+        }
+        0.5 + scale * sum + bias * ones
+    }
 }
 
 /// Storage of the basis images.
@@ -323,12 +343,10 @@ impl Convolution {
         );
         let scale = self.scale;
         let rec = exp.reconstruction();
+        // The decoding is linear: decode(raw) = raw · (decode(1) − decode(0)) + decode(0).
+        let (bias, unit) = (T::decode_signed(0.0), T::decode_signed(1.0));
         let value = maps.lookup(frame, &self.filtering, stats, |d, raw| {
-            let mut b = [0.0f32; 2 * MAX_M as usize];
-            for (o, r) in b.iter_mut().zip(raw) {
-                *o = T::decode_signed(*r);
-            }
-            (scale * rec.eval(d - offset, &b[..raw.len()])).clamp(0.0, 1.0)
+            (scale * rec.eval_encoded(d - offset, raw, unit - bias, bias)).clamp(0.0, 1.0)
         });
         stats.memory_bytes = maps.memory_bytes();
         stats.count("depth_map_bytes", maps.depth_bytes as f64);
@@ -490,6 +508,23 @@ mod tests {
         for (z, d) in [(0.2, 0.7), (0.7, 0.2), (0.4, 0.41), (0.9, 0.1)] {
             e.basis(z, &mut b);
             assert!((e.reconstruct(d, &b) - e.step(z - d)).abs() < 1e-4);
+        }
+    }
+
+    #[test]
+    fn evaluating_encoded_basis_equals_decoding_first() {
+        let e = Expansion { m: 4, alpha: 0.5 };
+        let rec = e.reconstruction();
+        let mut b = [0.0f32; 8];
+        e.basis(0.37, &mut b);
+        let raw: Vec<f32> = b
+            .iter()
+            .map(|v| <u8 as Channel>::encode_signed(*v))
+            .collect();
+        let (bias, unit) = (u8::decode_signed(0.0), u8::decode_signed(1.0));
+        for d in [0.1f32, 0.36, 0.5, 0.8] {
+            let a = rec.eval_encoded(d, &raw, unit - bias, bias);
+            assert!((a - rec.eval(d, &b)).abs() < 1e-5, "d {d}");
         }
     }
 

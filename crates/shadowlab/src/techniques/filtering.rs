@@ -133,9 +133,10 @@ impl Channel for u8 {
     }
     #[inline]
     fn from_f32(v: f32) -> Self {
-        // Round half up: `as` truncates, which is floor for the clamped, non-negative
-        // value; NaN becomes 0.
-        (v.clamp(0.0, 255.0) + 0.5) as u8
+        // Round half up: `as` truncates towards zero and saturates, so values below 0 give 0,
+        // above 255 give 255, NaN gives 0, and the rest round to nearest — what clamping first
+        // would give, without the clamp's NaN handling (this runs once per channel per texel).
+        (v + 0.5) as u8
     }
     #[inline]
     fn encode_signed(v: f32) -> f32 {
@@ -1058,11 +1059,11 @@ impl ReceiverDepths {
                     // bilinear taps of the coarser of the two levels blended (within two of
                     // its texels, 2^⌈λ⌉ level-0 texels each), the blur.
                     let level = if lod.lambda.is_finite() {
-                        lod.lambda.clamp(0.0, 30.0).ceil()
+                        lod.lambda.clamp(0.0, 30.0).ceil() as u32
                     } else {
-                        0.0
+                        0
                     };
-                    let spill = 2.0 * 2.0f32.powf(level) + pad as f32;
+                    let spill = (2u32 << level) as f32 + pad as f32;
                     let (ex, ey) = if settings.filter == Filter::Anisotropic {
                         (
                             0.5 * (fp.dx.x.abs() + fp.dy.x.abs()) * w,
@@ -1368,5 +1369,10 @@ mod tests {
         assert_eq!(u8::from_f32(-3.0), 0);
         assert_eq!(u8::from_f32(300.0), 255);
         assert_eq!(u8::from_f32(f32::NAN), 0);
+        assert_eq!(u8::from_f32(-0.7), 0);
+        assert_eq!(u8::from_f32(254.6), 255);
+        assert_eq!(u8::from_f32(0.49), 0);
+        assert_eq!(u8::from_f32(f32::INFINITY), 255);
+        assert_eq!(u8::from_f32(f32::NEG_INFINITY), 0);
     }
 }
