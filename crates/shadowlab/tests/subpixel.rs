@@ -14,13 +14,16 @@ use shadowlab::scene::{Material, Scene};
 use shadowlab::techniques::{self, Frame, Shadows, Visibility};
 use shadowlab::view::ViewSamples;
 
-/// Largest share of planar-receiver pixels allowed to differ from the brute-force facet
-/// answer by more than [`LUT_SLACK_SAMPLES`] samples (the look-up table's quantization moves
-/// a shadow edge by up to ~0.02 pixel; a sample that close to an edge can flip, and rarely
-/// two edges of one pixel both do).
-const BRUTE_FORCE_OUTLIER_SHARE: f64 = 0.002;
-/// Samples per pixel the look-up table may get wrong on an ordinary pixel.
-const LUT_SLACK_SAMPLES: f32 = 2.0;
+/// Largest share of ground pixels allowed to differ from the brute-force facet answer by
+/// more than [`SLACK_SAMPLES`] samples. The half-plane masks are exact (the table's uncertain
+/// samples are tested one by one), so what remains is geometry the facet evaluation treats
+/// differently: under the point light, facets on the seam between two cube faces see the
+/// blockers of one face only (10 pixels along x = −5 here); under the directional light at
+/// 128 samples, 3 pixels differ by 3 to 5 samples.
+const BRUTE_FORCE_OUTLIER_SHARE: f64 = 0.001;
+/// Samples per pixel an ordinary pixel may differ from brute force by (a sample that lies on
+/// a shadow edge to within rounding may go either way).
+const SLACK_SAMPLES: f32 = 2.0;
 /// The spec's quality target: mean absolute error on planar receivers at 32 samples.
 const PLANAR_MAE_TARGET: f64 = 0.005;
 
@@ -170,7 +173,7 @@ fn check_against_brute_force(light: Light, n: u32, kind: &str) {
         "too few ground pixels: {}",
         pixels.len()
     );
-    let slack = LUT_SLACK_SAMPLES / n as f32 + 1e-6;
+    let slack = SLACK_SAMPLES / n as f32 + 1e-6;
     let mut outliers = 0;
     let mut partial = 0;
     let mut sum = 0.0f64;
@@ -197,7 +200,7 @@ fn check_against_brute_force(light: Light, n: u32, kind: &str) {
         "{outliers} of {} pixels differ by more than {slack}",
         pixels.len()
     );
-    assert!(mean < 1e-3, "mean difference {mean}");
+    assert!(mean < 5e-4, "mean difference {mean}");
 }
 
 #[test]
