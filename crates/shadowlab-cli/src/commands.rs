@@ -11,7 +11,7 @@ use shadowlab::reference::Reference;
 use shadowlab::sampling::{pattern, PatternKind};
 use shadowlab::shade;
 use shadowlab::techniques::{self, Frame, ShadowTechnique, Shadows};
-use shadowlab::view::ViewSamples;
+use shadowlab::view::{ViewLayers, ViewSamples};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -175,6 +175,35 @@ pub fn camera_pass(setup: &Setup, i: usize) -> Result<(Camera, ViewSamples)> {
     Ok((camera, view))
 }
 
+/// The layers behind the semi-transparent surfaces of a camera pass, when asked for.
+fn layers_of(
+    setup: &Setup,
+    camera: &Camera,
+    view: &ViewSamples,
+    want: bool,
+) -> Result<Option<ViewLayers>> {
+    Ok(if want {
+        Some(ViewLayers::render(&setup.scene, camera, view)?)
+    } else {
+        None
+    })
+}
+
+/// The shaded image of a result: the layers composited when the frame has them and the
+/// technique shaded them, else the nearest surfaces.
+fn shade_result(
+    setup: &Setup,
+    view: &ViewSamples,
+    layers: Option<&ViewLayers>,
+    vis: &shadowlab::techniques::Visibility,
+    layer_vis: Option<&[shadowlab::math::Vec3]>,
+) -> shade::RgbImage {
+    match (layers, layer_vis) {
+        (Some(l), Some(lv)) => shade::shade_layers(&setup.scene, view, l, &setup.light, vis, lv),
+        _ => shade::shade(&setup.scene, view, &setup.light, vis),
+    }
+}
+
 fn run_frame(run: &mut Run, frame: &Frame) -> Result<()> {
     let t0 = Instant::now();
     let s = run
@@ -229,16 +258,22 @@ pub fn render(a: &RenderArgs) -> Result<()> {
     for i in 0..setup.frames {
         let (camera, view) = camera_pass(&setup, i)?;
         camera_pass_ms = view.time_ms;
+        let layers = layers_of(&setup, &camera, &view, a.scene.layers)?;
         let mut frame = Frame::new(&setup.scene, &camera, &setup.light, &view);
+        if let Some(l) = &layers {
+            frame = frame.with_layers(l);
+        }
         frame.index = i;
         frame.dump_dir = a.dump.as_deref();
         run_frame(&mut run, &frame)?;
         if a.scene.frames > 1 {
-            let img = shade::shade(
-                &setup.scene,
+            let s = &run.last.as_ref().unwrap().0;
+            let img = shade_result(
+                &setup,
                 &view,
-                &setup.light,
-                &run.last.as_ref().unwrap().0.visibility,
+                layers.as_ref(),
+                &s.visibility,
+                s.layers.as_deref(),
             );
             let stem = a.output.with_extension("");
             shade::save_png(&img, Path::new(&format!("{}-{i:04}.png", stem.display())))?;
@@ -247,16 +282,22 @@ pub fn render(a: &RenderArgs) -> Result<()> {
             }
         }
         bar.inc(1);
-        last = Some((camera, view));
+        last = Some((camera, view, layers));
     }
     bar.finish_and_clear();
     let pb = progress::step("writing outputs");
     if let Some(anim) = animation {
         anim.finish()?;
     }
-    let (camera, view) = last.expect("at least one frame");
+    let (camera, view, layers) = last.expect("at least one frame");
     let (shadows, time_ms) = run.last.take().expect("rendered");
-    let img = shade::shade(&setup.scene, &view, &setup.light, &shadows.visibility);
+    let img = shade_result(
+        &setup,
+        &view,
+        layers.as_ref(),
+        &shadows.visibility,
+        shadows.layers.as_deref(),
+    );
     shade::save_png(&img, &a.output)?;
     if let Some(p) = &a.visibility {
         shade::write_visibility_exr(p, &view, &shadows.visibility)?;
@@ -280,6 +321,11 @@ pub fn render(a: &RenderArgs) -> Result<()> {
     st.insert("light".into(), light_json);
     st.insert("camera_pass_ms".into(), json!(camera_pass_ms));
     st.insert("covered_pixels".into(), json!(view.covered_count()));
+    if let Some(l) = &layers {
+        st.insert("layer_samples".into(), json!(l.len()));
+        st.insert("layers_ms".into(), json!(l.time_ms));
+        st.insert("layers_shaded".into(), json!(shadows.layers.is_some()));
+    }
     if a.scene.frames > 1 {
         st.insert("frames".into(), json!(run.frames));
     }
@@ -453,7 +499,11 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     for i in 0..setup.frames {
         bar.set_message(format!("frame {}/{} camera pass", i + 1, setup.frames));
         let (camera, view) = camera_pass(&setup, i)?;
+        let layers = layers_of(&setup, &camera, &view, a.scene.layers)?;
         let mut frame = Frame::new(&setup.scene, &camera, &setup.light, &view);
+        if let Some(l) = &layers {
+            frame = frame.with_layers(l);
+        }
         frame.index = i;
         frame.dump_dir = dump.as_deref();
         for (r, run) in runs.iter_mut().enumerate() {
@@ -461,7 +511,13 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             run_frame(run, &frame)?;
             if let Some(anim) = animations.get_mut(r) {
                 let (s, _) = run.last.as_ref().expect("just rendered");
-                let img = shade::shade(&setup.scene, &view, &setup.light, &s.visibility);
+                let img = shade_result(
+                    &setup,
+                    &view,
+                    layers.as_ref(),
+                    &s.visibility,
+                    s.layers.as_deref(),
+                );
                 shade::save_png(
                     &img,
                     &a.out
@@ -471,13 +527,13 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             }
             bar.inc(1);
         }
-        last = Some((camera, view));
+        last = Some((camera, view, layers));
     }
     bar.finish_and_clear();
     for anim in animations {
         anim.finish()?;
     }
-    let (camera, view) = last.expect("at least one frame");
+    let (camera, view, layers) = last.expect("at least one frame");
     let frame = Frame::new(&setup.scene, &camera, &setup.light, &view);
     let pb = progress::step(format!("ray-traced reference ({} spp)", a.reference_spp));
     let t0 = Instant::now();
@@ -485,12 +541,21 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     let bvh_ms = reference.build_ms;
     let ref_vis = reference.visibility(&frame, &samples);
     let ref_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let ref_layers = layers
+        .as_ref()
+        .map(|l| reference.layer_visibility(&frame, l));
     pb.finish_and_clear();
 
     let mut results = Vec::new();
     let mut rows = Vec::new();
     let bar = progress::bar(runs.len() as u64 + 1, "writing images");
-    let ref_img = shade::shade(&setup.scene, &view, &setup.light, &ref_vis);
+    let ref_img = shade_result(
+        &setup,
+        &view,
+        layers.as_ref(),
+        &ref_vis,
+        ref_layers.as_deref(),
+    );
     shade::save_png(&ref_img, &a.out.join("reference.png"))?;
     bar.inc(1);
     for run in &runs {
@@ -498,7 +563,13 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         bar.set_message(format!("writing {}", run.label));
         let m: Metrics = measure(&view, &s.visibility, &ref_vis);
         let file = slug(&run.label);
-        let shaded = shade::shade(&setup.scene, &view, &setup.light, &s.visibility);
+        let shaded = shade_result(
+            &setup,
+            &view,
+            layers.as_ref(),
+            &s.visibility,
+            s.layers.as_deref(),
+        );
         let error_img = shade::error_image(&view, &s.visibility, &ref_vis);
         shade::save_png(&shaded, &a.out.join(format!("{file}.png")))?;
         shade::save_png(&error_img, &a.out.join(format!("{file}-error.png")))?;
@@ -510,6 +581,15 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         r.insert("mismatch_rate".into(), json!(m.mismatch_rate));
         r.insert("mean_abs_error".into(), json!(m.mean_abs_error));
         r.insert("mean_abs_error_rgb".into(), json!(m.mean_abs_error_rgb));
+        if let (Some(ours), Some(truth)) = (&s.layers, &ref_layers) {
+            let lm = shadowlab::compare::compare_samples(ours, truth);
+            r.insert("layer_samples".into(), json!(ours.len()));
+            r.insert("layer_mismatch_rate".into(), json!(lm.mismatch_rate));
+            r.insert(
+                "layer_mean_abs_error_rgb".into(),
+                json!(lm.mean_abs_error_rgb),
+            );
+        }
         r.insert("image".into(), json!(format!("{file}.png")));
         r.insert("error_image".into(), json!(format!("{file}-error.png")));
         if setup.frames > 1 {
@@ -548,6 +628,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         "triangles": setup.scene.len(),
         "width": view.width, "height": view.height,
         "covered_pixels": view.covered_count(),
+        "layer_samples": layers.as_ref().map(|l| l.len()),
         "camera_pass_ms": view.time_ms,
         "frames": setup.frames,
         "threads": rayon::current_num_threads(),

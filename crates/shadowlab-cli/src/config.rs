@@ -40,6 +40,11 @@ pub struct SceneArgs {
     /// Render the camera path (or a still camera) this many times; reports describe the last.
     #[arg(long, default_value_t = 1)]
     pub frames: usize,
+    /// Shade the surfaces behind semi-transparent ones too, each with its own shadow term,
+    /// and composite them (techniques afsm and raytrace; the others shade the nearest
+    /// surface only).
+    #[arg(long)]
+    pub layers: bool,
 }
 
 /// A loaded scene with its resolved camera (first frame), light and path.

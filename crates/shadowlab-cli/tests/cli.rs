@@ -331,3 +331,69 @@ fn compare_writes_metrics_and_refuses_foreign_folders() {
         "precious"
     );
 }
+
+#[test]
+fn layers_behind_semi_transparent_surfaces_are_shaded_and_measured() {
+    let d = tmp("layers");
+    let out_dir = d.join("report");
+    let out = bin()
+        .args([
+            "compare",
+            "--scene",
+            "hairball",
+            "--scene-param",
+            "hairs=600",
+            "--techniques",
+            "afsm,sm",
+            "--width",
+            "128",
+            "--height",
+            "96",
+            "--layers",
+        ])
+        .arg("--out")
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("metrics.json")).unwrap())
+            .unwrap();
+    assert!(m["layer_samples"].as_u64().unwrap() > 1000);
+    let results = m["results"].as_array().unwrap();
+    let afsm = results.iter().find(|r| r["technique"] == "afsm").unwrap();
+    assert_eq!(afsm["layer_samples"], m["layer_samples"]);
+    assert!(afsm["layer_mismatch_rate"].as_f64().unwrap() <= 1e-4);
+    assert!(afsm["layer_mean_abs_error_rgb"].as_f64().unwrap() <= 1e-3);
+    // sm shades the nearest surfaces only: no layer metrics.
+    let sm = results.iter().find(|r| r["technique"] == "sm").unwrap();
+    assert!(sm.get("layer_samples").is_none());
+    // The composited picture differs from the nearest-surface one.
+    let layered = d.join("layered.png");
+    let front = d.join("front.png");
+    for (p, extra) in [(&layered, &["--layers"][..]), (&front, &[][..])] {
+        let o = bin()
+            .args([
+                "render",
+                "--scene",
+                "hairball",
+                "--scene-param",
+                "hairs=600",
+            ])
+            .args(["--technique", "afsm", "--width", "128", "--height", "96"])
+            .arg("--output")
+            .arg(p)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    assert_ne!(
+        std::fs::read(&layered).unwrap(),
+        std::fs::read(&front).unwrap()
+    );
+}

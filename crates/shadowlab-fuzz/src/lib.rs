@@ -13,7 +13,7 @@ use shadowlab::math::{vec3, Vec3};
 use shadowlab::reference::Reference;
 use shadowlab::scene::{self, Material, Scene};
 use shadowlab::techniques::{self, Frame};
-use shadowlab::view::ViewSamples;
+use shadowlab::view::{ViewLayers, ViewSamples};
 use std::path::PathBuf;
 
 /// The file kinds the loader harness feeds.
@@ -148,7 +148,8 @@ pub fn pipeline(data: &[u8]) {
         return;
     }
     let view = ViewSamples::render(&s, &camera);
-    let frame = Frame::new(&s, &camera, &light, &view);
+    let layers = ViewLayers::render(&s, &camera, &view).expect("a tiny scene has few layers");
+    let frame = Frame::new(&s, &camera, &light, &view).with_layers(&layers);
     let mut t = techniques::create(technique).expect("every listed technique exists");
     // Small maps keep each run fast; the parameter is optional for techniques without it.
     let _ = t.set_param("resolution", "64");
@@ -161,6 +162,15 @@ pub fn pipeline(data: &[u8]) {
             v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0,
             "{technique}: visibility {v} out of range"
         );
+    }
+    if let Some(l) = &out.layers {
+        assert_eq!(l.len(), layers.len());
+        for v in l {
+            assert!(
+                v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1.0,
+                "{technique}: layer visibility {v} out of range"
+            );
+        }
     }
     let r = Reference::build(&s).visibility(&frame, &[shadowlab::math::vec2(0.5, 0.5)]);
     for (k, v) in r.value.iter().enumerate() {

@@ -29,19 +29,34 @@ pub struct Metrics {
 
 /// Compares `vis` with `reference` over the pixels `view` covers.
 pub fn compare(view: &ViewSamples, vis: &Visibility, reference: &Visibility) -> Metrics {
+    let pairs = (0..vis.value.len())
+        .filter(|&k| view.covered(k))
+        .map(|k| (vis.value[k], reference.value[k]));
+    metrics(pairs)
+}
+
+/// Compares two lists of per-sample shadow terms (e.g. the layer samples behind
+/// semi-transparent surfaces) entry by entry; `covered_pixels` counts the samples.
+pub fn compare_samples(vis: &[Vec3], reference: &[Vec3]) -> Metrics {
+    assert_eq!(
+        vis.len(),
+        reference.len(),
+        "sample lists of different lengths"
+    );
+    metrics(vis.iter().copied().zip(reference.iter().copied()))
+}
+
+fn metrics(pairs: impl Iterator<Item = (Vec3, Vec3)>) -> Metrics {
     let mut m = Metrics::default();
     let (mut mismatches, mut sum, mut sum_rgb) = (0usize, 0f64, 0f64);
-    for k in 0..vis.value.len() {
-        if !view.covered(k) {
-            continue;
-        }
+    for (v, r) in pairs {
         m.covered_pixels += 1;
-        let d = (luminance(vis.value[k]) - luminance(reference.value[k])).abs();
+        let d = (luminance(v) - luminance(r)).abs();
         if d >= MISMATCH_THRESHOLD {
             mismatches += 1;
         }
         sum += d as f64;
-        let e = (vis.value[k] - reference.value[k]).abs();
+        let e = (v - r).abs();
         sum_rgb += (e.x + e.y + e.z) as f64 / 3.0;
     }
     if m.covered_pixels > 0 {

@@ -14,6 +14,7 @@ use crate::light::Light;
 use crate::math::{intersect_triangle, SurfacePoint, Vec2, Vec3, Vec3A};
 use crate::scene::Scene;
 use crate::techniques::{Frame, Visibility};
+use crate::view::ViewLayers;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::Ray;
 use rayon::prelude::*;
@@ -236,6 +237,26 @@ impl<'s> Reference<'s> {
             height: h,
             value: rows.concat(),
         }
+    }
+}
+
+impl Reference<'_> {
+    /// The reference shadow term of every layer sample behind the semi-transparent
+    /// surfaces of a frame (see [`ViewLayers`]), in the layers' order: one shadow ray from
+    /// each, formed exactly as for the camera pass's samples.
+    pub fn layer_visibility(&self, frame: &Frame, layers: &ViewLayers) -> Vec<Vec3> {
+        (0..layers.len())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|i| {
+                self.transmittance(
+                    frame.light,
+                    &layers.surface_point(i),
+                    layers.normal[i],
+                    layers.triangle[i],
+                )
+            })
+            .collect()
     }
 }
 

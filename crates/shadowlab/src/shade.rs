@@ -7,7 +7,7 @@ use crate::math::{vec3, Vec3};
 use crate::raster::DepthBuffer;
 use crate::scene::Scene;
 use crate::techniques::Visibility;
-use crate::view::ViewSamples;
+use crate::view::{ViewLayers, ViewSamples};
 use image::{ImageBuffer, Rgb, Rgba};
 use std::path::Path;
 
@@ -31,6 +31,18 @@ fn to_srgb8(c: Vec3) -> [u8; 3] {
     })
 }
 
+/// The shaded colour of one surface sample: `albedo · (ambient + (1 − ambient) ·
+/// max(0, n·l) · visibility)`.
+fn surface_colour(albedo: Vec3, p: Vec3, n: Vec3, light: &Light, vis: Vec3) -> Vec3 {
+    let (l, _) = light.shadow_ray(p);
+    let direct = if light.illuminates(p, n) {
+        n.dot(l).max(0.0)
+    } else {
+        0.0
+    };
+    albedo * (AMBIENT + (1.0 - AMBIENT) * direct * vis)
+}
+
 /// Shades a frame: `albedo · (ambient + (1 − ambient) · max(0, n·l) · visibility)`.
 pub fn shade(scene: &Scene, view: &ViewSamples, light: &Light, vis: &Visibility) -> RgbImage {
     let (w, h) = (view.width, view.height);
@@ -40,17 +52,58 @@ pub fn shade(scene: &Scene, view: &ViewSamples, light: &Light, vis: &Visibility)
             return Rgb(to_srgb8(BACKGROUND));
         }
         let albedo = scene.material_of(view.triangle[k] as usize).color;
-        let p = view.position[k];
-        let n = view.normal[k];
-        let (l, _) = light.shadow_ray(p);
-        let direct = if light.illuminates(p, n) {
-            n.dot(l).max(0.0)
-        } else {
-            0.0
-        };
-        Rgb(to_srgb8(
-            albedo * (AMBIENT + (1.0 - AMBIENT) * direct * vis.value[k]),
+        Rgb(to_srgb8(surface_colour(
+            albedo,
+            view.position[k],
+            view.normal[k],
+            light,
+            vis.value[k],
+        )))
+    })
+}
+
+/// Shades a frame with the layers behind its semi-transparent surfaces composited front to
+/// back: every surface of a pixel (the nearest one, then its layers) is shaded as in
+/// [`shade`] with its own shadow term, weighted by its opacity `1 − T` (per channel, `T`
+/// the material's transmittance) times the product of the transmittances in front of it;
+/// what passes the last surface shows the background.
+pub fn shade_layers(
+    scene: &Scene,
+    view: &ViewSamples,
+    layers: &ViewLayers,
+    light: &Light,
+    vis: &Visibility,
+    layer_vis: &[Vec3],
+) -> RgbImage {
+    let (w, h) = (view.width, view.height);
+    ImageBuffer::from_fn(w, h, |x, y| {
+        let k = (y * w + x) as usize;
+        if !view.covered(k) {
+            return Rgb(to_srgb8(BACKGROUND));
+        }
+        let surfaces = std::iter::once((
+            view.triangle[k],
+            view.position[k],
+            view.normal[k],
+            vis.value[k],
         ))
+        .chain(layers.of_pixel(k).map(|i| {
+            (
+                layers.triangle[i],
+                layers.position[i],
+                layers.normal[i],
+                layer_vis[i],
+            )
+        }));
+        let mut colour = Vec3::ZERO;
+        let mut through = Vec3::ONE;
+        for (id, p, n, v) in surfaces {
+            let m = scene.material_of(id as usize);
+            colour +=
+                through * (Vec3::ONE - m.transmittance) * surface_colour(m.color, p, n, light, v);
+            through *= m.transmittance;
+        }
+        Rgb(to_srgb8(colour + through * BACKGROUND))
     })
 }
 

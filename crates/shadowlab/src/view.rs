@@ -8,7 +8,8 @@
 //! the differences to where the rays through the neighbouring pixel centres meet the
 //! same plane, the software equivalent of the GPU's `ddx`/`ddy`.
 
-use crate::camera::Camera;
+use crate::camera::{Camera, RayGenerator};
+use crate::error::{Error, Result};
 use crate::math::{intersect_plane, SurfacePoint, Vec3};
 use crate::raster::{self, NO_TRIANGLE};
 use crate::scene::Scene;
@@ -39,6 +40,60 @@ pub struct ViewSamples {
     pub camera: Camera,
     /// Wall time of the pass in milliseconds.
     pub time_ms: f64,
+}
+
+/// The surface of triangle `id` seen through the centre of pixel `(x, y)`.
+struct Sample {
+    point: SurfacePoint,
+    normal: Vec3,
+    depth: f32,
+    dpdx: Vec3,
+    dpdy: Vec3,
+}
+
+/// Where the primary ray through the centre of pixel `(x, y)` meets the plane of triangle
+/// `id`, with the face normal turned to the camera and the derivatives; `None` when the ray
+/// runs along the plane or the result is not finite.
+fn sample(
+    scene: &Scene,
+    rays: &RayGenerator,
+    eye: Vec3,
+    fwd: Vec3,
+    id: u32,
+    x: u32,
+    y: u32,
+) -> Option<Sample> {
+    let v = scene.triangle(id as usize);
+    let cx = x as f32 + 0.5;
+    let cy = y as f32 + 0.5;
+    let d = rays.direction(cx, cy);
+    let hit = intersect_plane(eye, d, v)?;
+    let sp = SurfacePoint::from_barycentrics(v, hit.b);
+    let mut n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+    if n.dot(d) > 0.0 {
+        n = -n;
+    }
+    if !sp.p.is_finite() || n == Vec3::ZERO {
+        return None;
+    }
+    // Neighbouring centre rays meet the same plane at t = n·(p − eye) / n·dir.
+    let plane = n.dot(sp.p - eye);
+    let at = |dx: f32, dy: f32| {
+        let dir = rays.direction(cx + dx, cy + dy);
+        let t = plane / n.dot(dir);
+        if t > 0.0 && t.is_finite() {
+            eye + dir * t - sp.p
+        } else {
+            Vec3::ZERO
+        }
+    };
+    Some(Sample {
+        point: sp,
+        normal: n,
+        depth: (sp.p - eye).dot(fwd),
+        dpdx: at(1.0, 0.0),
+        dpdy: at(0.0, 1.0),
+    })
 }
 
 impl ViewSamples {
@@ -74,61 +129,29 @@ impl ViewSamples {
         let rows: Vec<_> = (0..h)
             .into_par_iter()
             .map(|y| {
-                let mut row = Vec::with_capacity(w as usize);
-                for x in 0..w {
-                    let id = triangle[(y * w + x) as usize];
-                    if id == NO_TRIANGLE {
-                        row.push(None);
-                        continue;
-                    }
-                    let v = scene.triangle(id as usize);
-                    let cx = x as f32 + 0.5;
-                    let cy = y as f32 + 0.5;
-                    let d = rays.direction(cx, cy);
-                    let Some(hit) = intersect_plane(eye, d, v) else {
-                        row.push(None);
-                        continue;
-                    };
-                    let sp = SurfacePoint::from_barycentrics(v, hit.b);
-                    let mut n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
-                    if n.dot(d) > 0.0 {
-                        n = -n;
-                    }
-                    // Neighbouring centre rays meet the same plane at t = n·(p − eye) / n·dir.
-                    let plane = n.dot(sp.p - eye);
-                    let at = |dx: f32, dy: f32| {
-                        let dir = rays.direction(cx + dx, cy + dy);
-                        let t = plane / n.dot(dir);
-                        if t > 0.0 && t.is_finite() {
-                            eye + dir * t - sp.p
-                        } else {
-                            Vec3::ZERO
-                        }
-                    };
-                    row.push(Some((
-                        sp,
-                        n,
-                        (sp.p - eye).dot(fwd),
-                        at(1.0, 0.0),
-                        at(0.0, 1.0),
-                    )));
-                }
-                row
+                (0..w)
+                    .map(|x| {
+                        let id = triangle[(y * w + x) as usize];
+                        (id != NO_TRIANGLE)
+                            .then(|| sample(scene, &rays, eye, fwd, id, x, y))
+                            .flatten()
+                    })
+                    .collect::<Vec<_>>()
             })
             .collect();
         for (y, row) in rows.into_iter().enumerate() {
             for (x, s) in row.into_iter().enumerate() {
                 let k = y * w as usize + x;
                 match s {
-                    Some((sp, n, depth, dx, dy)) if sp.p.is_finite() && n != Vec3::ZERO => {
-                        vs.position[k] = sp.p;
-                        vs.position_error[k] = sp.error;
-                        vs.normal[k] = n;
-                        vs.depth[k] = depth;
-                        vs.dpdx[k] = dx;
-                        vs.dpdy[k] = dy;
+                    Some(s) => {
+                        vs.position[k] = s.point.p;
+                        vs.position_error[k] = s.point.error;
+                        vs.normal[k] = s.normal;
+                        vs.depth[k] = s.depth;
+                        vs.dpdx[k] = s.dpdx;
+                        vs.dpdy[k] = s.dpdy;
                     }
-                    _ => vs.triangle[k] = NO_TRIANGLE,
+                    None => vs.triangle[k] = NO_TRIANGLE,
                 }
             }
         }
@@ -165,5 +188,167 @@ impl ViewSamples {
             }
         }
         b
+    }
+}
+
+/// The most layer samples one frame may hold (see [`ViewLayers::render`]): 2²⁶, about 3 GiB
+/// of samples.
+pub const MAX_LAYER_SAMPLES: usize = 1 << 26;
+
+/// The surfaces behind semi-transparent ones: for every pixel whose nearest surface lets
+/// light through, each further surface the pixel's centre ray meets, front to back, down to
+/// and including the first opaque one (all of them when none is opaque). The nearest
+/// surface itself is the pixel's [`ViewSamples`] entry; these are the other layers a
+/// renderer composites behind it, each a receiver with its own shadow term.
+///
+/// Layer samples are stored pixel by pixel (pixel `k`'s are `offsets[k]..offsets[k + 1]`),
+/// each computed exactly as the camera pass computes its samples: where the centre ray
+/// meets the triangle's plane, with the error bound, and the face normal turned to the
+/// camera.
+#[derive(Clone, Debug, Default)]
+pub struct ViewLayers {
+    /// Start of each pixel's layer samples, and the total at the end (`pixels + 1` entries).
+    pub offsets: Vec<u32>,
+    /// The pixel each layer sample belongs to.
+    pub pixel: Vec<u32>,
+    /// Triangle of each layer sample.
+    pub triangle: Vec<u32>,
+    /// World position of each layer sample.
+    pub position: Vec<Vec3>,
+    /// Per-axis floating-point error bound of `position`.
+    pub position_error: Vec<Vec3>,
+    /// Unit face normal, turned to face the camera.
+    pub normal: Vec<Vec3>,
+    /// View depth (distance along the view axis).
+    pub depth: Vec<f32>,
+    /// Wall time of the pass in milliseconds.
+    pub time_ms: f64,
+}
+
+impl ViewLayers {
+    /// Collects the layers behind the semi-transparent nearest surfaces of `view` (empty
+    /// when the scene is opaque). The rasterizer gathers every fragment behind such a
+    /// surface (an A-buffer per tile); fragments are ordered by depth, ties by triangle
+    /// index, the order of the camera pass's own depth test.
+    pub fn render(scene: &Scene, camera: &Camera, view: &ViewSamples) -> Result<Self> {
+        let t0 = std::time::Instant::now();
+        let (w, h) = (camera.width, camera.height);
+        let n = (w * h) as usize;
+        let mut out = ViewLayers {
+            offsets: vec![0; n + 1],
+            ..Default::default()
+        };
+        if !scene.has_transparency() {
+            out.time_ms = t0.elapsed().as_secs_f64() * 1e3;
+            return Ok(out);
+        }
+        let clip_from_world = camera.clip_from_world();
+        let setups = raster::setup(scene.len(), w, h, |i| {
+            let c = scene.triangle(i).map(|p| clip_from_world * p.extend(1.0));
+            (c, c.map(|c| c.w))
+        });
+        let front = raster::depth_buffer(&setups, w, h);
+        let see_through =
+            |k: usize| view.covered(k) && !scene.material_of(view.triangle[k] as usize).is_opaque();
+        // Every fragment behind a see-through nearest surface: (pixel, depth, triangle).
+        let tiles = raster::rasterize(
+            &setups,
+            w,
+            h,
+            |_| Vec::new(),
+            |frags: &mut Vec<(u32, f32, u32)>, _, f| {
+                let k = (f.y * w + f.x) as usize;
+                if !see_through(k) {
+                    return;
+                }
+                let (d0, id0) = (front.depth[k], front.id[k]);
+                if f.id != id0 && (f.depth > d0 || (f.depth == d0 && f.id > id0)) {
+                    frags.push((k as u32, f.depth, f.id));
+                }
+            },
+        );
+        let total: usize = tiles.iter().map(|(_, f)| f.len()).sum();
+        if total > MAX_LAYER_SAMPLES {
+            return Err(Error::Limit(format!(
+                "the semi-transparent surfaces of scene {:?} put {total} surfaces behind the nearest ones, above the limit of {MAX_LAYER_SAMPLES} layer samples; lower the resolution (--width/--height)",
+                scene.name
+            )));
+        }
+        let mut frags: Vec<(u32, f32, u32)> = Vec::with_capacity(total);
+        for (_, f) in tiles {
+            frags.extend(f);
+        }
+        frags.par_sort_unstable_by(|a, b| {
+            a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2))
+        });
+        // Keep each pixel's fragments down to its first opaque one.
+        let mut kept = Vec::with_capacity(frags.len());
+        let mut i = 0;
+        while i < frags.len() {
+            let k = frags[i].0;
+            while i < frags.len() && frags[i].0 == k {
+                kept.push(frags[i]);
+                let opaque = scene.material_of(frags[i].2 as usize).is_opaque();
+                i += 1;
+                if opaque {
+                    while i < frags.len() && frags[i].0 == k {
+                        i += 1;
+                    }
+                }
+            }
+        }
+        let eye = camera.eye;
+        let fwd = camera.forward();
+        let rays = camera.rays();
+        let samples: Vec<Option<Sample>> = kept
+            .par_iter()
+            .with_min_len(1024)
+            .map(|&(k, _, id)| sample(scene, &rays, eye, fwd, id, k % w, k / w))
+            .collect();
+        for (&(k, _, id), s) in kept.iter().zip(samples) {
+            let Some(s) = s else { continue };
+            out.offsets[k as usize + 1] += 1;
+            out.pixel.push(k);
+            out.triangle.push(id);
+            out.position.push(s.point.p);
+            out.position_error.push(s.point.error);
+            out.normal.push(s.normal);
+            out.depth.push(s.depth);
+        }
+        for k in 0..n {
+            out.offsets[k + 1] += out.offsets[k];
+        }
+        out.time_ms = t0.elapsed().as_secs_f64() * 1e3;
+        Ok(out)
+    }
+
+    /// Number of layer samples.
+    pub fn len(&self) -> usize {
+        self.triangle.len()
+    }
+
+    /// True when no pixel has a layer behind its nearest surface.
+    pub fn is_empty(&self) -> bool {
+        self.triangle.is_empty()
+    }
+
+    /// The layer samples of pixel `k`, front to back.
+    #[inline]
+    pub fn of_pixel(&self, k: usize) -> std::ops::Range<usize> {
+        self.offsets[k] as usize..self.offsets[k + 1] as usize
+    }
+
+    /// The surface point of layer sample `i` with its error bound.
+    #[inline]
+    pub fn surface_point(&self, i: usize) -> SurfacePoint {
+        SurfacePoint {
+            p: self.position[i],
+            error: self.position_error[i],
+        }
+    }
+
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        self.offsets.len() * 4 + self.len() * (4 + 4 + 12 + 12 + 12 + 4)
     }
 }

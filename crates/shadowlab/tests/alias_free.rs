@@ -1,7 +1,8 @@
 //! `afsm` (alias-free shadow maps) against brute force and the ray-traced reference: every
 //! pixel's shadow term on small random scenes, the mismatch rate on every built-in scene
 //! and every mesh of the shared data with directional, spot and point lights, the hairball's
-//! semi-transparent shadows, and independence of thread count and leaf size.
+//! semi-transparent shadows, the shadow terms of the layers behind semi-transparent
+//! receivers, and independence of thread count and leaf size.
 
 use shadowlab::camera::Camera;
 use shadowlab::compare::{compare, Metrics};
@@ -10,7 +11,7 @@ use shadowlab::math::{vec2, vec3, Vec3};
 use shadowlab::reference::{brute_force_occlusion, Reference};
 use shadowlab::scene::{self, builtin, Material, Scene};
 use shadowlab::techniques::{self, Frame, Shadows};
-use shadowlab::view::ViewSamples;
+use shadowlab::view::{ViewLayers, ViewSamples};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -226,8 +227,158 @@ fn hairball_transmittance_matches_reference() {
     assert!(m.mismatch_rate <= MISMATCH_TARGET);
 }
 
+#[test]
+fn hairball_layers_behind_semi_transparent_receivers_match_reference() {
+    let scene = scene::load("hairball", &BTreeMap::new()).unwrap();
+    let camera = camera_for(&scene, 512, 384);
+    let light = scene.light.unwrap();
+    let view = ViewSamples::render(&scene, &camera);
+    let layers = ViewLayers::render(&scene, &camera, &view).unwrap();
+    let frame = Frame::new(&scene, &camera, &light, &view);
+    let layered = frame.with_layers(&layers);
+    let reference = Reference::build(&scene);
+    let truth = reference.layer_visibility(&layered, &layers);
+    let with = afsm(&layered, &[]);
+    let without = afsm(&frame, &[]);
+    // The nearest surfaces' shadow terms do not change when layers join the BSP.
+    assert_eq!(with.visibility, without.visibility);
+    assert!(without.layers.is_none());
+    let ours = with.layers.expect("afsm shades the layers");
+    let m = shadowlab::compare::compare_samples(&ours, &truth);
+    let deep = (0..view.triangle.len())
+        .filter(|&k| layers.of_pixel(k).len() >= 5)
+        .count();
+    let grey = truth.iter().filter(|t| t.x > 0.05 && t.x < 0.95).count();
+    eprintln!(
+        "hairball layers: {} samples, {deep} pixels with 5+ layers, {grey} partly shadowed; mismatch {:.6}%, mae rgb {:.2e}",
+        layers.len(),
+        m.mismatch_rate * 100.0,
+        m.mean_abs_error_rgb
+    );
+    assert!(layers.len() > 50_000 && deep > 1000 && grey > 1000);
+    assert!(
+        m.mismatch_rate <= MISMATCH_TARGET,
+        "mismatch {}",
+        m.mismatch_rate
+    );
+    assert!(
+        m.mean_abs_error_rgb <= HAIRBALL_MAE_TARGET,
+        "mae {}",
+        m.mean_abs_error_rgb
+    );
+}
+
+/// Every surface the centre ray of pixel `(x, y)` crosses behind the nearest one, front to
+/// back, down to the first opaque one: the brute-force version of [`ViewLayers`].
+fn layers_by_ray(scene: &Scene, camera: &Camera, x: u32, y: u32, nearest: u32) -> Vec<u32> {
+    let d = camera.rays().direction(x as f32 + 0.5, y as f32 + 0.5);
+    let mut hits: Vec<(f32, u32)> = (0..scene.len())
+        .filter_map(|i| {
+            shadowlab::math::intersect_triangle(
+                camera.eye,
+                d,
+                0.0,
+                f32::INFINITY,
+                scene.triangle(i),
+            )
+            .map(|h| (h.t, i as u32))
+        })
+        .collect();
+    hits.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut out = Vec::new();
+    for (_, i) in hits.into_iter().skip_while(|&(_, i)| i != nearest).skip(1) {
+        out.push(i);
+        if scene.material_of(i as usize).is_opaque() {
+            break;
+        }
+    }
+    out
+}
+
 // ---------------------------------------------------------------------------------------
 // Brute force on small random scenes.
+
+#[test]
+fn layers_match_brute_force_on_small_random_scenes() {
+    let mut rng = Lcg(23);
+    let (mut pixels, mut samples, mut differ) = (0usize, 0usize, 0usize);
+    let mut partial = 0usize;
+    for trial in 0..9 {
+        // Mostly glass, so rays cross several layers.
+        let mut scene = random_scene(&mut rng, 60 + 30 * (trial % 3), true);
+        for m in 1..scene.materials.len() {
+            if trial % 2 == 0 {
+                scene.materials[m].transmittance = vec3(0.8, 0.6, 0.7);
+            }
+        }
+        let dir = vec3(rng.next() - 0.5, 0.4 + rng.next(), rng.next() - 0.5).normalize();
+        let mut camera = Camera::look_at(dir * 6.0, Vec3::ZERO, 50.0, 80, 60);
+        camera.fit_depth_range(&scene.bounds);
+        let light = match trial % 3 {
+            0 => Light::Directional {
+                to_light: vec3(rng.next() - 0.5, 1.0, rng.next() - 0.5).normalize(),
+            },
+            1 => Light::Spot {
+                position: vec3(rng.next() - 0.5, 2.5, rng.next() - 0.5) * 2.0,
+                target: rng.v() * 0.5,
+                fov_deg: 40.0 + 80.0 * rng.next(),
+            },
+            _ => Light::Point {
+                position: rng.v() * 0.5,
+            },
+        };
+        let view = ViewSamples::render(&scene, &camera);
+        let layers = ViewLayers::render(&scene, &camera, &view).unwrap();
+        let frame = Frame::new(&scene, &camera, &light, &view).with_layers(&layers);
+        // The layers are the surfaces a ray through the pixel centre crosses (a pixel
+        // centre exactly on an edge may be decided differently by the rasterizer's fill
+        // rule and the ray test: a numerical tie).
+        for k in 0..view.triangle.len() {
+            if !view.covered(k) {
+                continue;
+            }
+            let (x, y) = ((k as u32) % camera.width, (k as u32) / camera.width);
+            let mut want = Vec::new();
+            if !scene.material_of(view.triangle[k] as usize).is_opaque() {
+                want = layers_by_ray(&scene, &camera, x, y, view.triangle[k]);
+            }
+            let got: Vec<u32> = layers.of_pixel(k).map(|i| layers.triangle[i]).collect();
+            pixels += 1;
+            if got != want {
+                differ += 1;
+            }
+        }
+        // Every layer sample's shadow term is brute force's, exactly.
+        let got = afsm(&frame, &[("leaf-size", ["1", "7", "64"][trial % 3])])
+            .layers
+            .unwrap();
+        for (i, got) in got.iter().enumerate() {
+            let expected = if !frame.layer_lit(&layers, i) {
+                Vec3::ZERO
+            } else {
+                let sp = layers.surface_point(i);
+                let (l, _) = light.shadow_ray(sp.p);
+                let o = sp.offset_origin(layers.normal[i], l);
+                let (dir, t_max) = light.shadow_ray(o);
+                brute_force_occlusion(&scene, o, dir, t_max, layers.triangle[i])
+            };
+            assert_eq!(*got, expected, "trial {trial}: layer sample {i}");
+            samples += 1;
+            if expected != Vec3::ZERO && expected != Vec3::ONE {
+                partial += 1;
+            }
+        }
+    }
+    eprintln!("layers: {pixels} pixels, {differ} differ from ray casting; {samples} layer samples, {partial} partly shadowed");
+    assert!(
+        samples > 1500 && partial > 400,
+        "{samples} layer samples, {partial} partial"
+    );
+    assert!(
+        differ as f64 <= 1e-3 * pixels as f64,
+        "{differ} of {pixels} pixels' layers differ from ray casting"
+    );
+}
 
 struct Lcg(u64);
 

@@ -8,7 +8,7 @@ use shadowlab::math::{vec2, vec3, Vec3};
 use shadowlab::reference::Reference;
 use shadowlab::scene::{self, Material, Scene};
 use shadowlab::techniques::{self, Frame};
-use shadowlab::view::ViewSamples;
+use shadowlab::view::{ViewLayers, ViewSamples};
 use std::path::PathBuf;
 
 fn data(name: &str) -> PathBuf {
@@ -163,6 +163,124 @@ fn semi_transparent_casters_multiply_their_transmittance() {
     let r = Reference::build(&s);
     let t = r.occlusion(vec3(0.1, 0.0, 0.3), Vec3::Y, f32::INFINITY, 0);
     assert_eq!(t, vec3(0.9, 0.2, 0.2) * vec3(0.3, 0.3, 0.8));
+}
+
+#[test]
+fn layers_behind_semi_transparent_surfaces_composite_front_to_back() {
+    // A red sheet over a floor with a blue sheet above it, seen from above; the light
+    // shines from straight above.
+    let mut s = Scene::new("sheets");
+    let floor = s.add_material(Material::opaque("floor", vec3(0.8, 0.8, 0.8)));
+    let red = s.add_material(Material {
+        name: "red".into(),
+        color: vec3(1.0, 0.1, 0.1),
+        transmittance: vec3(0.6, 0.3, 0.3),
+    });
+    let blue = s.add_material(Material {
+        name: "blue".into(),
+        color: vec3(0.1, 0.1, 1.0),
+        transmittance: vec3(0.2, 0.2, 0.7),
+    });
+    let quad = |s: &mut Scene, y: f32, h: f32, m: u32| {
+        s.push([vec3(-h, y, -h), vec3(h, y, h), vec3(h, y, -h)], m);
+        s.push([vec3(-h, y, -h), vec3(-h, y, h), vec3(h, y, h)], m);
+    };
+    quad(&mut s, 0.0, 4.0, floor);
+    quad(&mut s, 1.0, 1.0, red);
+    quad(&mut s, 2.0, 0.5, blue);
+    let mut c = Camera::look_at(vec3(0.0, 8.0, 0.01), Vec3::ZERO, 40.0, 64, 64);
+    c.fit_depth_range(&s.bounds);
+    let l = Light::Directional { to_light: Vec3::Y };
+    let view = ViewSamples::render(&s, &c);
+    let layers = ViewLayers::render(&s, &c, &view).unwrap();
+    let frame = Frame::new(&s, &c, &l, &view).with_layers(&layers);
+    // A pixel near the centre (off the quads' diagonals, where a ray through the shared
+    // edge would count both triangles) sees blue, then red, then the floor.
+    let centre = (29 * 64 + 36) as usize;
+    assert_eq!(view.triangle[centre] / 2, 2);
+    let behind: Vec<u32> = layers
+        .of_pixel(centre)
+        .map(|i| layers.triangle[i] / 2)
+        .collect();
+    assert_eq!(behind, [1, 0]);
+    // Pixels whose nearest surface is the opaque floor have no layers.
+    let corner = 0usize;
+    assert_eq!(view.triangle[corner] / 2, 0);
+    assert!(layers.of_pixel(corner).is_empty());
+    // Shadow terms of the layers: red is under blue, the floor under both.
+    let shadows = techniques::create("afsm").unwrap().render(&frame).unwrap();
+    let lv = shadows.layers.unwrap();
+    let first = layers.of_pixel(centre).start;
+    assert_eq!(lv[first], vec3(0.2, 0.2, 0.7));
+    assert_eq!(lv[first + 1], vec3(0.2, 0.2, 0.7) * vec3(0.6, 0.3, 0.3));
+    // The composite: each surface lit straight on (n·l = 1), weighted by its opacity and
+    // by the transmittance in front of it.
+    let img = shadowlab::shade::shade_layers(&s, &view, &layers, &l, &shadows.visibility, &lv);
+    let shaded = |albedo: Vec3, v: Vec3| {
+        albedo * (shadowlab::shade::AMBIENT + (1.0 - shadowlab::shade::AMBIENT) * v)
+    };
+    let tb = vec3(0.2, 0.2, 0.7);
+    let tr = vec3(0.6, 0.3, 0.3);
+    let expected = (Vec3::ONE - tb) * shaded(vec3(0.1, 0.1, 1.0), Vec3::ONE)
+        + tb * (Vec3::ONE - tr) * shaded(vec3(1.0, 0.1, 0.1), tb)
+        + tb * tr * shaded(vec3(0.8, 0.8, 0.8), tb * tr);
+    let to_srgb = |x: f32| {
+        let s = if x <= 0.0031308 {
+            12.92 * x
+        } else {
+            1.055 * x.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0 + 0.5) as u8
+    };
+    let px = img.get_pixel(36, 29).0;
+    for ch in 0..3 {
+        assert!(
+            (px[ch] as i32 - to_srgb(expected[ch]) as i32).abs() <= 1,
+            "channel {ch}: {px:?} vs {expected}"
+        );
+    }
+    // Without layers to composite, an opaque scene shades exactly as before.
+    let (b, mut bc, bl) = bunny();
+    bc.width = 96;
+    bc.height = 72;
+    let bview = ViewSamples::render(&b, &bc);
+    let blayers = ViewLayers::render(&b, &bc, &bview).unwrap();
+    assert!(blayers.is_empty());
+    let bframe = Frame::new(&b, &bc, &bl, &bview);
+    let bvis = Reference::build(&b).visibility(&bframe, &[vec2(0.5, 0.5)]);
+    assert_eq!(
+        shadowlab::shade::shade_layers(&b, &bview, &blayers, &bl, &bvis, &[]),
+        shadowlab::shade::shade(&b, &bview, &bl, &bvis)
+    );
+    // Layers and their shadow terms do not depend on the thread count.
+    let per_threads: Vec<_> = [1, 4]
+        .iter()
+        .map(|&n| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let hair = scene::load(
+                        "hairball",
+                        &[("hairs".to_string(), "400".to_string())].into(),
+                    )
+                    .unwrap();
+                    let mut hc = hair.camera.unwrap();
+                    hc.width = 160;
+                    hc.height = 120;
+                    hc.fit_depth_range(&hair.bounds);
+                    let hv = ViewSamples::render(&hair, &hc);
+                    let hl = ViewLayers::render(&hair, &hc, &hv).unwrap();
+                    let hlight = hair.light.unwrap();
+                    let f = Frame::new(&hair, &hc, &hlight, &hv).with_layers(&hl);
+                    let out = techniques::create("afsm").unwrap().render(&f).unwrap();
+                    (hl.triangle.clone(), hl.offsets.clone(), out.layers.unwrap())
+                })
+        })
+        .collect();
+    assert!(!per_threads[0].0.is_empty());
+    assert_eq!(per_threads[0], per_threads[1]);
 }
 
 #[test]

@@ -1584,6 +1584,7 @@ impl ShadowTechnique for Adaptive {
                 value,
             },
             stats,
+            layers: None,
         })
     }
 }

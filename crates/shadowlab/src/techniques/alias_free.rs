@@ -34,6 +34,11 @@
 //!   [`CULL_TOLERANCE`] so it can never drop a pair the exact test would count.
 //! - Semi-transparent casters modulate the sample's RGB transmittance in triangle-index
 //!   order and an opaque one sets it to black: the product equals the reference's.
+//! - Semi-transparent receivers (Section 4): when the frame carries the layers behind its
+//!   semi-transparent surfaces ([`Frame::layers`], every visible surface of each pixel down
+//!   to the first opaque one), their samples join the pixels' samples in the same BSP,
+//!   each with its own shadow ray and its own shadow term ([`Shadows::layers`]); the image
+//!   composites them (`shade::shade_layers`).
 //! - The work is split over the subtrees of the BSP (each owns its samples), and each
 //!   subtree takes its triangles in index order: results and counters are identical for
 //!   any thread count.
@@ -55,8 +60,6 @@
 //!   traversal for the same result.
 //! - A triangle nearly edge-on from the light, whose orientation rounding could flip, is
 //!   bounded by the slab along its longest edge instead of its three edge functions.
-//! - Semi-transparent *receivers* (layers behind the nearest surface) are not shaded: each
-//!   pixel gets the shadow term of its nearest surface, as the reference does.
 //!
 //! Known artifacts: none beyond those of the reference (hard shadows only). A triangle
 //! lying in the plane of a light ray (edge-on, or a point light on a surface) is decided by
@@ -142,7 +145,7 @@ impl ShadowTechnique for AliasFree {
         let trees: Vec<Bsp> = stats.stage("bsp", || {
             planes.into_iter().map(|p| Bsp::build(p, leaf)).collect()
         });
-        let (visibility, counters) = stats.stage("raster", || rasterize(frame, &trees));
+        let (visibility, layers, counters) = stats.stage("raster", || rasterize(frame, &trees));
         let nodes: usize = trees.iter().map(|t| t.nodes.len()).sum();
         let samples: usize = trees.iter().map(|t| t.su.len()).sum();
         stats.count("samples", samples as f64);
@@ -163,7 +166,10 @@ impl ShadowTechnique for AliasFree {
                 dump_bsp(&dir.join(format!("afsm-bsp{i}.png")), t)?;
             }
         }
-        Ok(Shadows { visibility, stats })
+        Ok(Shadows {
+            layers,
+            ..Shadows::new(visibility, stats)
+        })
     }
 }
 
@@ -224,7 +230,8 @@ struct ShadowRay {
     k: [u8; 3],
     /// The triangle the sample lies on (never its own occluder).
     own: u32,
-    /// The screen pixel the sample belongs to.
+    /// Where the sample's shadow term goes: its screen pixel, or, past the last pixel,
+    /// its layer sample (`pixels + i` for layer sample `i`).
     pixel: u32,
 }
 
@@ -366,13 +373,27 @@ fn shadow_rays(
 ) -> (Vec<ShadowRay>, Vec<Pt>, Vec<u8>) {
     let view = frame.view;
     let light = frame.light;
-    let n = view.triangle.len();
+    let pixels = view.triangle.len();
+    let layers = frame.layers;
+    // Receivers: the pixels' nearest surfaces, then the layer samples behind them.
+    let n = pixels + layers.map_or(0, |l| l.len());
+    let lit = |k: usize| match layers {
+        Some(l) if k >= pixels => frame.layer_lit(l, k - pixels),
+        _ => frame.receiver_lit(k),
+    };
+    let receiver = |k: usize| match layers {
+        Some(l) if k >= pixels => {
+            let i = k - pixels;
+            (l.surface_point(i), l.normal[i], l.triangle[i])
+        }
+        _ => (view.surface_point(k), view.normal[k], view.triangle[k]),
+    };
     // Count the lit samples of each block, so every block writes its own slice.
     let counts: Vec<usize> = (0..n.div_ceil(TRANSFORM_BLOCK))
         .into_par_iter()
         .map(|b| {
             (b * TRANSFORM_BLOCK..((b + 1) * TRANSFORM_BLOCK).min(n))
-                .filter(|&k| frame.receiver_lit(k))
+                .filter(|&k| lit(k))
                 .count()
         })
         .collect();
@@ -409,14 +430,14 @@ fn shadow_rays(
     jobs.into_par_iter().for_each(|(b, first, r, p, f)| {
         let mut j = 0;
         for k in b * TRANSFORM_BLOCK..((b + 1) * TRANSFORM_BLOCK).min(n) {
-            if !frame.receiver_lit(k) {
+            if !lit(k) {
                 continue;
             }
-            let sp = view.surface_point(k);
+            let (sp, normal, own) = receiver(k);
             let (l, _) = light.shadow_ray(sp.p);
-            let o = sp.offset_origin(view.normal[k], l);
+            let o = sp.offset_origin(normal, l);
             let (dir, t_max) = light.shadow_ray(o);
-            r[j] = ShadowRay::new(o, dir, t_max, view.triangle[k], k as u32);
+            r[j] = ShadowRay::new(o, dir, t_max, own, k as u32);
             let id = (first + j) as u32;
             let (pt, fc) = match proj {
                 Some(proj) => (proj.project(o, id), 0),
@@ -1421,11 +1442,26 @@ fn bin(bsp: &Bsp, t: &TriSetup, out: &mut [Vec<TriSetup>], visited: &mut u64) {
     }
 }
 
-/// Rasterizes every triangle into every plane's BSP and writes the shadow terms to pixels.
-fn rasterize(frame: &Frame, trees: &[Bsp]) -> (Visibility, Counters) {
+/// Rasterizes every triangle into every plane's BSP and writes the shadow terms to pixels
+/// (and to the layer samples, when the frame has layers).
+fn rasterize(frame: &Frame, trees: &[Bsp]) -> (Visibility, Option<Vec<Vec3>>, Counters) {
     let view = frame.view;
     let scene = frame.scene;
     let mut out = Visibility::lit(view.width, view.height);
+    let pixels = out.value.len();
+    let mut layer_out = frame.layers.map(|l| {
+        (0..l.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|i| {
+                if frame.layer_lit(l, i) {
+                    Vec3::ONE
+                } else {
+                    Vec3::ZERO
+                }
+            })
+            .collect::<Vec<_>>()
+    });
     // Pixels whose viewed side the light cannot reach are dark in every technique.
     out.value
         .par_iter_mut()
@@ -1511,10 +1547,14 @@ fn rasterize(frame: &Frame, trees: &[Bsp]) -> (Visibility, Counters) {
         }
         drop(work);
         for (r, v) in bsp.rays.iter().zip(&vis) {
-            out.value[r.pixel as usize] = *v;
+            let k = r.pixel as usize;
+            match &mut layer_out {
+                Some(l) if k >= pixels => l[k - pixels] = *v,
+                _ => out.value[k] = *v,
+            }
         }
     }
-    (out, total)
+    (out, layer_out, total)
 }
 
 #[cfg(test)]

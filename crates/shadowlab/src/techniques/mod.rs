@@ -23,7 +23,7 @@ use crate::error::{Error, Result};
 use crate::light::Light;
 use crate::math::Vec3;
 use crate::scene::Scene;
-use crate::view::ViewSamples;
+use crate::view::{ViewLayers, ViewSamples};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -42,6 +42,10 @@ pub struct Frame<'a> {
     pub index: usize,
     /// Where to write intermediate images, when asked for.
     pub dump_dir: Option<&'a Path>,
+    /// The surfaces behind semi-transparent nearest surfaces, when the caller wants them
+    /// shaded too (see [`ViewLayers`]); techniques that support them return their shadow
+    /// terms in [`Shadows::layers`].
+    pub layers: Option<&'a ViewLayers>,
 }
 
 impl<'a> Frame<'a> {
@@ -59,6 +63,15 @@ impl<'a> Frame<'a> {
             view,
             index: 0,
             dump_dir: None,
+            layers: None,
+        }
+    }
+
+    /// The same frame, with the layers behind its semi-transparent surfaces to shade.
+    pub fn with_layers(self, layers: &'a ViewLayers) -> Self {
+        Frame {
+            layers: Some(layers),
+            ..self
         }
     }
 
@@ -70,6 +83,13 @@ impl<'a> Frame<'a> {
             && self
                 .light
                 .illuminates(self.view.position[k], self.view.normal[k])
+    }
+
+    /// True when layer sample `i` of [`Frame::layers`] faces the light (see
+    /// [`Light::illuminates`]).
+    #[inline]
+    pub fn layer_lit(&self, layers: &ViewLayers, i: usize) -> bool {
+        self.light.illuminates(layers.position[i], layers.normal[i])
     }
 }
 
@@ -129,6 +149,20 @@ pub struct Shadows {
     pub visibility: Visibility,
     /// Timings, memory and counters.
     pub stats: Stats,
+    /// The shadow term of every layer sample of [`Frame::layers`], in its order; `None`
+    /// when the frame has no layers or the technique shades only the nearest surface.
+    pub layers: Option<Vec<Vec3>>,
+}
+
+impl Shadows {
+    /// The result of a technique that shades the nearest surface of each pixel only.
+    pub fn new(visibility: Visibility, stats: Stats) -> Self {
+        Shadows {
+            visibility,
+            stats,
+            layers: None,
+        }
+    }
 }
 
 /// A shadow algorithm.

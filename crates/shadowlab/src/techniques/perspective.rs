@@ -340,6 +340,7 @@ impl ShadowTechnique for Perspective {
                     value,
                 },
                 stats,
+                layers: None,
             });
         };
         let Some(mut setup) = stats.stage("body", || build_setup(frame, &receivers, res))? else {
@@ -390,6 +391,7 @@ impl ShadowTechnique for Perspective {
                 value,
             },
             stats,
+            layers: None,
         })
     }
 }

@@ -1,5 +1,6 @@
 //! `raytrace`: the ray-traced reference as a technique, so its cost sits in the same
-//! tables as the others. See [`crate::reference`] for how rays are traced.
+//! tables as the others. See [`crate::reference`] for how rays are traced. The layers
+//! behind semi-transparent surfaces ([`Frame::layers`]) get one shadow ray each.
 
 use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
 use crate::error::Result;
@@ -51,7 +52,17 @@ impl ShadowTechnique for RayTrace {
         let samples = pattern(PatternKind::Grid, self.spp)?;
         let visibility = stats.stage("trace", || reference.visibility(frame, &samples));
         stats.memory_bytes = reference.memory_bytes() as u64;
-        stats.count("rays", frame.view.covered_count() as f64 * self.spp as f64);
-        Ok(Shadows { visibility, stats })
+        let layers = frame
+            .layers
+            .map(|l| stats.stage("layers", || reference.layer_visibility(frame, l)));
+        let layer_rays = frame.layers.map_or(0, |l| l.len());
+        stats.count(
+            "rays",
+            frame.view.covered_count() as f64 * self.spp as f64 + layer_rays as f64,
+        );
+        Ok(Shadows {
+            layers,
+            ..Shadows::new(visibility, stats)
+        })
     }
 }

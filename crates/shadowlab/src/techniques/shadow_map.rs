@@ -344,6 +344,7 @@ impl ShadowTechnique for ShadowMap {
                 value,
             },
             stats,
+            layers: None,
         })
     }
 }

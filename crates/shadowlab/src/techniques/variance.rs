@@ -188,6 +188,7 @@ impl ShadowTechnique for Variance {
                 value,
             },
             stats,
+            layers: None,
         })
     }
 }
