@@ -200,6 +200,85 @@ pub fn sin_cos_pi(x: f32) -> (f32, f32) {
     }
 }
 
+/// [`sin_cos_pi`] for `|x| < 2²²` in operations that vectorize (no integer conversion):
+/// bit-identical results.
+#[inline(always)]
+fn sin_cos_pi_wide(x: f32) -> (f32, f32) {
+    // ⌊x + ½⌋: adding 1.5·2²³ rounds to the nearest integer, one less where that rounded up;
+    // the low bit of the sum's mantissa is that integer's parity.
+    const MAGIC: f32 = 12_582_912.0;
+    let y = x + 0.5;
+    let t = y + MAGIC;
+    let rounded = t - MAGIC;
+    let up = rounded > y;
+    let n = if up { rounded - 1.0 } else { rounded };
+    let odd = (t.to_bits() ^ u32::from(up)) & 1;
+    let r = (x - n) * PI;
+    let r2 = r * r;
+    let s = r
+        * (1.0
+            + r2 * (-1.0 / 6.0
+                + r2 * (1.0 / 120.0
+                    + r2 * (-1.0 / 5040.0 + r2 * (1.0 / 362_880.0 + r2 * (-1.0 / 39_916_800.0))))));
+    let c = 1.0
+        + r2 * (-0.5
+            + r2 * (1.0 / 24.0
+                + r2 * (-1.0 / 720.0
+                    + r2 * (1.0 / 40_320.0
+                        + r2 * (-1.0 / 3_628_800.0 + r2 * (1.0 / 479_001_600.0))))));
+    let flip = odd << 31;
+    (
+        f32::from_bits(s.to_bits() ^ flip),
+        f32::from_bits(c.to_bits() ^ flip),
+    )
+}
+
+/// Texels per block of [`encode_row`].
+const ENCODE_BLOCK: usize = 64;
+
+/// The encoded basis values (`T::encode_signed` of [`Expansion::basis`] of the normalized
+/// depth) of a row of map depths, `2m` values per texel, into `row`: the same values as the
+/// per-texel computation, computed for blocks of texels at once so the arithmetic vectorizes.
+fn encode_row<T: Channel>(
+    m: u32,
+    range: &super::filtering::DepthRange,
+    depths: &[f32],
+    row: &mut [f32],
+) {
+    let m = m as usize;
+    let ch = 2 * m;
+    let mut basis = [[0.0f32; ENCODE_BLOCK]; 2 * MAX_M as usize];
+    for (block, out) in depths
+        .chunks(ENCODE_BLOCK)
+        .zip(row.chunks_mut(ENCODE_BLOCK * ch))
+    {
+        let n = block.len();
+        let (mut s, mut c) = ([0.0f32; ENCODE_BLOCK], [0.0f32; ENCODE_BLOCK]);
+        let (mut s2, mut c2) = ([0.0f32; ENCODE_BLOCK], [0.0f32; ENCODE_BLOCK]);
+        for i in 0..n {
+            let (s1, c1) = sin_cos_pi_wide(range.normalize(block[i]));
+            s[i] = s1;
+            c[i] = c1;
+            // As in `Expansion::sin_cos`: the angle steps by 2πx.
+            s2[i] = 2.0 * s1 * c1;
+            c2[i] = c1 * c1 - s1 * s1;
+        }
+        for pair in basis[..ch].chunks_exact_mut(2) {
+            let [bs, bc] = pair else { unreachable!() };
+            for i in 0..n {
+                bs[i] = T::encode_signed(s[i]);
+                bc[i] = T::encode_signed(c[i]);
+                (s[i], c[i]) = (s[i] * c2[i] + c[i] * s2[i], c[i] * c2[i] - s[i] * s2[i]);
+            }
+        }
+        for (i, texel) in out.chunks_exact_mut(ch).enumerate() {
+            for (j, v) in texel.iter_mut().enumerate() {
+                *v = basis[j][i];
+            }
+        }
+    }
+}
+
 /// Eq. 13 ready to evaluate per pixel (see [`Expansion::reconstruction`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Reconstruction {
@@ -326,19 +405,17 @@ impl Convolution {
             1
         };
         check_map_size("csm", views, self.resolution, ch, T::BYTES)?;
-        let maps = FilteredMaps::<T>::build(
+        let maps = FilteredMaps::<T>::build_rows(
             frame,
             self.resolution,
             ch,
             span,
             &self.filtering,
             stats,
-            |m, r, x, y, out| {
-                let z = r.normalize(m.depth[(y * m.width + x) as usize]);
-                exp.basis(z, out);
-                for v in out.iter_mut() {
-                    *v = T::encode_signed(*v);
-                }
+            |m, r, y, row| {
+                let w = m.width as usize;
+                let depths = &m.depth[y as usize * w..(y as usize + 1) * w];
+                encode_row::<T>(exp.m, r, depths, row);
             },
         );
         let scale = self.scale;
@@ -484,6 +561,64 @@ mod tests {
                     (out[2 * (k - 1) as usize + 1] - a.cos()).abs() < 2e-5,
                     "x {x} k {k}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn wide_sin_cos_pi_is_bit_identical() {
+        let mut xs: Vec<f32> = (-40_000..=40_000).map(|i| i as f32 / 8192.0).collect();
+        xs.extend((0..=2000).map(|i| i as f32 * 0.5 - 500.0));
+        xs.extend([
+            0.5f32,
+            -0.5,
+            1.5,
+            0.49999997,
+            0.50000006,
+            -0.0,
+            1e-30,
+            1_000_000.5,
+        ]);
+        for x in xs {
+            let (a, b) = sin_cos_pi(x);
+            let (c, d) = sin_cos_pi_wide(x);
+            assert_eq!(
+                (a.to_bits(), b.to_bits()),
+                (c.to_bits(), d.to_bits()),
+                "x {x}"
+            );
+        }
+    }
+
+    #[test]
+    fn encoded_rows_match_per_texel_basis() {
+        let range = super::super::filtering::DepthRange {
+            near: 2.0,
+            far: 7.0,
+            span: 0.77,
+        };
+        let depths: Vec<f32> = (0..150)
+            .map(|i| match i {
+                3 => f32::INFINITY,
+                4 => f32::NAN,
+                _ => 1.5 + i as f32 * 0.041,
+            })
+            .collect();
+        for m in [1, 4, 7, 16] {
+            let ch = 2 * m as usize;
+            let mut row = vec![0.0f32; depths.len() * ch];
+            encode_row::<u8>(m, &range, &depths, &mut row);
+            let mut b = vec![0.0f32; ch];
+            for (x, &d) in depths.iter().enumerate() {
+                Expansion::sin_cos(m, range.normalize(d), &mut b);
+                for (j, v) in b.iter().enumerate() {
+                    let want = <u8 as Channel>::encode_signed(*v);
+                    assert_eq!(
+                        row[x * ch + j].to_bits(),
+                        want.to_bits(),
+                        "m {m} x {x} j {j}"
+                    );
+                }
             }
         }
     }

@@ -103,6 +103,31 @@ pub trait Channel: Copy + Default + Send + Sync + 'static {
     fn encode_signed(v: f32) -> f32;
     /// The value in `[-1, 1]` that a (filtered) stored number represents.
     fn decode_signed(raw: f32) -> f32;
+
+    /// Stores a row of numbers, `dst[i] = from_f32(src[i])`, in a loop the compiler can
+    /// vectorize.
+    #[inline]
+    fn store_row(src: &[f32], dst: &mut [Self]) {
+        for (d, s) in dst.iter_mut().zip(src) {
+            *d = Self::from_f32(*s);
+        }
+    }
+
+    /// One row of a 2×2 mip reduction of textures of `N` channels (`N = 0`: `ch` read at run
+    /// time): texel `x` of `out` is `from_f32` of a quarter of the sum of texels `2x` and
+    /// `2x + 1` of the rows `r0` and `r1`, summed in that order.
+    #[inline]
+    fn reduce_row_2x2<const N: usize>(r0: &[Self], r1: &[Self], out: &mut [Self], ch: usize) {
+        let ch = chans::<N>(ch);
+        for (x, texel) in out.chunks_exact_mut(ch).enumerate() {
+            let i = 2 * x * ch;
+            let (a, b) = (&r0[i..i + 2 * ch], &r1[i..i + 2 * ch]);
+            for c in 0..ch {
+                let sum = a[c].to_f32() + a[ch + c].to_f32() + b[c].to_f32() + b[ch + c].to_f32();
+                texel[c] = Self::from_f32(sum * 0.25);
+            }
+        }
+    }
 }
 
 impl Channel for f32 {
@@ -146,6 +171,36 @@ impl Channel for u8 {
     fn decode_signed(raw: f32) -> f32 {
         raw / 127.5 - 1.0
     }
+    #[inline]
+    fn store_row(src: &[f32], dst: &mut [Self]) {
+        for (d, s) in dst.iter_mut().zip(src) {
+            // `from_f32` in operations that vectorize (the saturating cast does not): `v > 0`
+            // is false for NaN, so NaN and negatives give 0 and values past 255 give 255, as
+            // the cast saturates; in between, the cast truncates, which for `v ≥ 0` is
+            // `floor(v)`: adding 2²³ rounds `v` to the nearest integer in the low mantissa
+            // bits, and one less is taken where that rounded up.
+            let v = *s + 0.5;
+            let v = if v > 0.0 { v } else { 0.0 };
+            let v = if v < 255.0 { v } else { 255.0 };
+            let t = v + 8_388_608.0;
+            let up = u32::from(t - 8_388_608.0 > v);
+            *d = t.to_bits().wrapping_sub(up) as u8;
+        }
+    }
+    #[inline]
+    fn reduce_row_2x2<const N: usize>(r0: &[Self], r1: &[Self], out: &mut [Self], ch: usize) {
+        // The sum of four codes is an integer below 2¹⁰, so `from_f32(sum / 4)` (exact in f32,
+        // then rounded half up) is `(sum + 2) >> 2`: the same codes in integer arithmetic.
+        let ch = chans::<N>(ch);
+        for (x, texel) in out.chunks_exact_mut(ch).enumerate() {
+            let i = 2 * x * ch;
+            let (a, b) = (&r0[i..i + 2 * ch], &r1[i..i + 2 * ch]);
+            for c in 0..ch {
+                let sum = a[c] as u16 + a[ch + c] as u16 + b[c] as u16 + b[ch + c] as u16;
+                texel[c] = ((sum + 2) >> 2) as u8;
+            }
+        }
+    }
 }
 
 /// A 2D image of `channels` interleaved values per texel, row-major from the top row.
@@ -170,21 +225,33 @@ impl<T: Channel> Texture<T> {
         channels: usize,
         f: impl Fn(u32, u32, &mut [f32]) + Sync,
     ) -> Self {
+        Self::from_rows(width, height, channels, |y, row| {
+            for (x, texel) in row.chunks_exact_mut(channels).enumerate() {
+                f(x as u32, y, texel);
+            }
+        })
+    }
+
+    /// A texture whose row `y` gets the values `f(y, row)` writes into `row` (of length
+    /// `width × channels`, zeroed before each call), stored in the format `T` with
+    /// [`Channel::store_row`].
+    pub fn from_rows(
+        width: u32,
+        height: u32,
+        channels: usize,
+        f: impl Fn(u32, &mut [f32]) + Sync,
+    ) -> Self {
         let row_len = width as usize * channels;
         let mut data = vec![T::default(); row_len * height as usize];
         if row_len > 0 {
-            data.par_chunks_mut(row_len)
-                .enumerate()
-                .for_each(|(y, row)| {
-                    let mut v = vec![0.0f32; channels];
-                    for (x, texel) in row.chunks_exact_mut(channels).enumerate() {
-                        v.fill(0.0);
-                        f(x as u32, y as u32, &mut v);
-                        for (d, s) in texel.iter_mut().zip(&v) {
-                            *d = T::from_f32(*s);
-                        }
-                    }
-                });
+            data.par_chunks_mut(row_len).enumerate().for_each_init(
+                || vec![0.0f32; row_len],
+                |v, (y, row)| {
+                    v.fill(0.0);
+                    f(y as u32, v);
+                    T::store_row(v, row);
+                },
+            );
         }
         Texture {
             width,
@@ -653,16 +720,7 @@ fn reduce_n<T: Channel, const N: usize>(src: &Texture<T>) -> Texture<T> {
             .for_each(|(y, out)| {
                 let r0 = &src.data[2 * y * sw * ch..(2 * y + 1) * sw * ch];
                 let r1 = &src.data[(2 * y + 1) * sw * ch..(2 * y + 2) * sw * ch];
-                for (x, texel) in out.chunks_exact_mut(ch).enumerate() {
-                    let i = 2 * x * ch;
-                    for c in 0..ch {
-                        let sum = r0[i + c].to_f32()
-                            + r0[i + ch + c].to_f32()
-                            + r1[i + c].to_f32()
-                            + r1[i + ch + c].to_f32();
-                        texel[c] = T::from_f32(sum * 0.25);
-                    }
-                }
+                T::reduce_row_2x2::<N>(r0, r1, out, ch);
             });
     } else {
         let tx = box_taps(src.width, w);
@@ -1142,6 +1200,33 @@ impl<T: Channel> FilteredMaps<T> {
         stats: &mut Stats,
         encode: impl Fn(&DepthBuffer, &DepthRange, u32, u32, &mut [f32]) + Sync,
     ) -> Self {
+        Self::build_rows(
+            frame,
+            res,
+            channels,
+            span,
+            settings,
+            stats,
+            |m, r, y, row| {
+                for (x, texel) in row.chunks_exact_mut(channels).enumerate() {
+                    encode(m, r, x as u32, y, texel);
+                }
+            },
+        )
+    }
+
+    /// [`Self::build`] with an encoder of whole rows: `encode(map, range, y, row)` writes the
+    /// `width × channels` values of row `y` (zeroed before the call) into `row`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn build_rows(
+        frame: &Frame,
+        res: u32,
+        channels: usize,
+        span: f32,
+        settings: &FilterSettings,
+        stats: &mut Stats,
+        encode: impl Fn(&DepthBuffer, &DepthRange, u32, &mut [f32]) + Sync,
+    ) -> Self {
         let maps = stats.stage("shadow_map", || render_light_maps(frame, res));
         let receivers = stats.stage("fit", || {
             ReceiverDepths::of_frame(frame, &maps.views, &maps.maps, settings)
@@ -1168,7 +1253,7 @@ impl<T: Channel> FilteredMaps<T> {
                 .iter()
                 .zip(&ranges)
                 .map(|(m, r)| {
-                    Texture::from_fn(m.width, m.height, channels, |x, y, o| encode(m, r, x, y, o))
+                    Texture::from_rows(m.width, m.height, channels, |y, row| encode(m, r, y, row))
                 })
                 .collect()
         });
@@ -1361,6 +1446,69 @@ mod tests {
             &mut o,
         );
         assert!((o[0] - 2.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn u8_rows_store_as_single_values() {
+        let mut src = vec![
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            -0.0,
+            0.0,
+            -0.5,
+            -0.49,
+            0.4999999,
+            0.5,
+            254.5,
+            254.49998,
+            255.0,
+            255.49,
+            255.5,
+            256.0,
+            1e30,
+            -1e30,
+            f32::MIN_POSITIVE,
+        ];
+        for i in -4000..=300_000 {
+            src.push(i as f32 / 1024.0);
+            src.push(i as f32 * 0.5 + 0.5);
+        }
+        let mut seed = 12345u32;
+        for _ in 0..100_000 {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            src.push((seed >> 8) as f32 / (1 << 24) as f32 * 270.0 - 5.0);
+        }
+        let mut dst = vec![0u8; src.len()];
+        u8::store_row(&src, &mut dst);
+        for (s, d) in src.iter().zip(&dst) {
+            assert_eq!(*d, u8::from_f32(*s), "{s}");
+        }
+    }
+
+    #[test]
+    fn u8_mip_rows_round_like_float_average() {
+        let ch = 2;
+        let r0: Vec<u8> = (0..64u32).map(|i| (i * 37 % 256) as u8).collect();
+        let r1: Vec<u8> = (0..64u32).map(|i| (i * 101 % 256) as u8).collect();
+        let mut a = vec![0u8; 32];
+        let mut b = vec![0u8; 32];
+        u8::reduce_row_2x2::<2>(&r0, &r1, &mut a, ch);
+        for (x, texel) in b.chunks_exact_mut(ch).enumerate() {
+            for c in 0..ch {
+                let i = 2 * x * ch + c;
+                let sum = r0[i] as f32 + r0[i + ch] as f32 + r1[i] as f32 + r1[i + ch] as f32;
+                texel[c] = u8::from_f32(sum * 0.25);
+            }
+        }
+        assert_eq!(a, b);
+        for sum in 0..=1020u16 {
+            assert_eq!(
+                ((sum + 2) >> 2) as u8,
+                u8::from_f32(sum as f32 * 0.25),
+                "{sum}"
+            );
+        }
     }
 
     #[test]
