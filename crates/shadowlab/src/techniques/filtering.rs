@@ -104,6 +104,14 @@ pub trait Channel: Copy + Default + Send + Sync + 'static {
     /// The value in `[-1, 1]` that a (filtered) stored number represents.
     fn decode_signed(raw: f32) -> f32;
 
+    /// `acc[c] += w · src[c].to_f32()` for every channel.
+    #[inline(always)]
+    fn add_scaled<const N: usize>(acc: &mut [f32; N], src: &[Self; N], w: f32) {
+        for (a, s) in acc.iter_mut().zip(src) {
+            *a += w * s.to_f32();
+        }
+    }
+
     /// Stores a row of numbers, `dst[i] = from_f32(src[i])`, in a loop the compiler can
     /// vectorize.
     #[inline]
@@ -185,6 +193,14 @@ impl Channel for u8 {
             let t = v + 8_388_608.0;
             let up = u32::from(t - 8_388_608.0 > v);
             *d = t.to_bits().wrapping_sub(up) as u8;
+        }
+    }
+    #[inline(always)]
+    fn add_scaled<const N: usize>(acc: &mut [f32; N], src: &[Self; N], w: f32) {
+        // Widened to i32 first: a signed conversion that vectorizes on every x86-64.
+        let v: [f32; N] = std::array::from_fn(|c| i32::from(src[c]) as f32);
+        for c in 0..N {
+            acc[c] += w * v[c];
         }
     }
     #[inline]
@@ -621,6 +637,19 @@ impl<T: Channel> MipChain<T> {
             (yb * w + xa, (1.0 - ax) * ay),
             (yb * w + xb, ax * ay),
         ];
+        if N > 0 {
+            // Fixed-size texels: each tap is a few vector operations.
+            let acc: &mut [f32; N] = (&mut acc[..N]).try_into().expect("N channels");
+            for (i, tw) in taps {
+                let wt = tw * weight;
+                if wt == 0.0 {
+                    continue;
+                }
+                let src: &[T; N] = t.data[i * N..i * N + N].try_into().expect("N channels");
+                T::add_scaled(acc, src, wt);
+            }
+            return;
+        }
         for (i, tw) in taps {
             let wt = tw * weight;
             if wt == 0.0 {
