@@ -236,18 +236,19 @@ fn sin_cos_pi_wide(x: f32) -> (f32, f32) {
 /// Texels per block of [`encode_row`].
 const ENCODE_BLOCK: usize = 64;
 
-/// The encoded basis values (`T::encode_signed` of [`Expansion::basis`] of the normalized
-/// depth) of a row of map depths, `2m` values per texel, into `row`: the same values as the
-/// per-texel computation, computed for blocks of texels at once so the arithmetic vectorizes.
-fn encode_row<T: Channel>(
+/// The stored basis values (`T::from_f32` of `T::encode_signed` of [`Expansion::basis`] of
+/// the normalized depth) of a row of map depths, `2m` values per texel, into `row`: the same
+/// values as the per-texel computation, computed and quantized for blocks of texels at once
+/// so the arithmetic vectorizes. `M` is `m` when it is known at compile time, else 0.
+fn encode_row<T: Channel, const M: usize>(
     m: u32,
     range: &super::filtering::DepthRange,
     depths: &[f32],
-    row: &mut [f32],
+    row: &mut [T],
 ) {
-    let m = m as usize;
+    let m = if M > 0 { M } else { m as usize };
     let ch = 2 * m;
-    let mut basis = [[0.0f32; ENCODE_BLOCK]; 2 * MAX_M as usize];
+    let mut stored = [[T::default(); ENCODE_BLOCK]; 2 * MAX_M as usize];
     for (block, out) in depths
         .chunks(ENCODE_BLOCK)
         .zip(row.chunks_mut(ENCODE_BLOCK * ch))
@@ -263,17 +264,20 @@ fn encode_row<T: Channel>(
             s2[i] = 2.0 * s1 * c1;
             c2[i] = c1 * c1 - s1 * s1;
         }
-        for pair in basis[..ch].chunks_exact_mut(2) {
-            let [bs, bc] = pair else { unreachable!() };
-            for i in 0..n {
-                bs[i] = T::encode_signed(s[i]);
-                bc[i] = T::encode_signed(c[i]);
+        let (mut es, mut ec) = ([0.0f32; ENCODE_BLOCK], [0.0f32; ENCODE_BLOCK]);
+        for pair in stored[..ch].chunks_exact_mut(2) {
+            let [qs, qc] = pair else { unreachable!() };
+            for i in 0..ENCODE_BLOCK {
+                es[i] = T::encode_signed(s[i]);
+                ec[i] = T::encode_signed(c[i]);
                 (s[i], c[i]) = (s[i] * c2[i] + c[i] * s2[i], c[i] * c2[i] - s[i] * s2[i]);
             }
+            T::store_row(&es[..n], &mut qs[..n]);
+            T::store_row(&ec[..n], &mut qc[..n]);
         }
         for (i, texel) in out.chunks_exact_mut(ch).enumerate() {
             for (j, v) in texel.iter_mut().enumerate() {
-                *v = basis[j][i];
+                *v = stored[j][i];
             }
         }
     }
@@ -415,7 +419,15 @@ impl Convolution {
             |m, r, y, row| {
                 let w = m.width as usize;
                 let depths = &m.depth[y as usize * w..(y as usize + 1) * w];
-                encode_row::<T>(exp.m, r, depths, row);
+                match exp.m {
+                    1 => encode_row::<T, 1>(1, r, depths, row),
+                    2 => encode_row::<T, 2>(2, r, depths, row),
+                    3 => encode_row::<T, 3>(3, r, depths, row),
+                    4 => encode_row::<T, 4>(4, r, depths, row),
+                    8 => encode_row::<T, 8>(8, r, depths, row),
+                    16 => encode_row::<T, 16>(16, r, depths, row),
+                    m => encode_row::<T, 0>(m, r, depths, row),
+                }
             },
         );
         let scale = self.scale;
@@ -606,16 +618,27 @@ mod tests {
             .collect();
         for m in [1, 4, 7, 16] {
             let ch = 2 * m as usize;
-            let mut row = vec![0.0f32; depths.len() * ch];
-            encode_row::<u8>(m, &range, &depths, &mut row);
+            let mut row = vec![0u8; depths.len() * ch];
+            let mut row_f = vec![0.0f32; depths.len() * ch];
+            match m {
+                4 => {
+                    encode_row::<u8, 4>(m, &range, &depths, &mut row);
+                    encode_row::<f32, 4>(m, &range, &depths, &mut row_f);
+                }
+                _ => {
+                    encode_row::<u8, 0>(m, &range, &depths, &mut row);
+                    encode_row::<f32, 0>(m, &range, &depths, &mut row_f);
+                }
+            }
             let mut b = vec![0.0f32; ch];
             for (x, &d) in depths.iter().enumerate() {
                 Expansion::sin_cos(m, range.normalize(d), &mut b);
                 for (j, v) in b.iter().enumerate() {
                     let want = <u8 as Channel>::encode_signed(*v);
+                    assert_eq!(row[x * ch + j], u8::from_f32(want), "m {m} x {x} j {j}");
                     assert_eq!(
-                        row[x * ch + j].to_bits(),
-                        want.to_bits(),
+                        row_f[x * ch + j].to_bits(),
+                        v.to_bits(),
                         "m {m} x {x} j {j}"
                     );
                 }

@@ -277,6 +277,29 @@ impl<T: Channel> Texture<T> {
         }
     }
 
+    /// A texture whose row `y` gets the stored values `f(y, row)` writes into `row` (of
+    /// length `width × channels`, holding `T::default()` before the call).
+    pub fn from_stored_rows(
+        width: u32,
+        height: u32,
+        channels: usize,
+        f: impl Fn(u32, &mut [T]) + Sync,
+    ) -> Self {
+        let row_len = width as usize * channels;
+        let mut data = vec![T::default(); row_len * height as usize];
+        if row_len > 0 {
+            data.par_chunks_mut(row_len)
+                .enumerate()
+                .for_each(|(y, row)| f(y as u32, row));
+        }
+        Texture {
+            width,
+            height,
+            channels,
+            data,
+        }
+    }
+
     /// The values of texel `(x, y)`.
     #[inline]
     pub fn texel(&self, x: u32, y: u32) -> &[T] {
@@ -979,17 +1002,22 @@ pub const MAX_RECEIVER_SLOPE: f32 = 8.0;
 
 /// A min-depth pyramid of a depth map: level `l` texel `(i, j)` is the nearest depth of the
 /// level-0 texels `[i·2^l, (i+1)·2^l) × [j·2^l, (j+1)·2^l)` (`+inf` where empty), so the
-/// nearest depth of any texel rectangle is bounded from below by at most 2×2 reads.
+/// nearest depth of any texel rectangle is bounded from below by at most 2×2 reads. Level 0
+/// is the map itself, borrowed.
 #[derive(Clone, Debug)]
-pub struct MinPyramid {
-    /// `(width, height, depths)` of each level, level 0 first.
-    pub levels: Vec<(u32, u32, Vec<f32>)>,
+pub struct MinPyramid<'a> {
+    /// `(width, height, depths)` of each level, level 0 (the map's depths) first.
+    pub levels: Vec<(u32, u32, std::borrow::Cow<'a, [f32]>)>,
 }
 
-impl MinPyramid {
+impl<'a> MinPyramid<'a> {
     /// The pyramid of `map`, down to 1×1 (each level `⌈side / 2⌉`).
-    pub fn build(map: &DepthBuffer) -> Self {
-        let mut levels = vec![(map.width, map.height, map.depth.clone())];
+    pub fn build(map: &'a DepthBuffer) -> Self {
+        let mut levels = vec![(
+            map.width,
+            map.height,
+            std::borrow::Cow::Borrowed(&map.depth[..]),
+        )];
         loop {
             let (w, h, prev) = levels.last().expect("level 0 exists");
             let (w, h) = (*w as usize, *h as usize);
@@ -1000,18 +1028,28 @@ impl MinPyramid {
             let mut next = vec![f32::INFINITY; nw * nh];
             if nw > 0 {
                 next.par_chunks_mut(nw).enumerate().for_each(|(y, row)| {
-                    for (x, o) in row.iter_mut().enumerate() {
-                        let mut m = f32::INFINITY;
-                        for sy in (2 * y)..(2 * y + 2).min(h) {
-                            for sx in (2 * x)..(2 * x + 2).min(w) {
-                                m = m.min(prev[sy * w + sx]);
-                            }
-                        }
-                        *o = m;
+                    let r0 = &prev[2 * y * w..(2 * y + 1) * w];
+                    // The last row of an odd height has no partner: it pairs with itself.
+                    let r1 = if 2 * y + 1 < h {
+                        &prev[(2 * y + 1) * w..(2 * y + 2) * w]
+                    } else {
+                        r0
+                    };
+                    // Pairs of columns (min is exact in any order; the final `min` with +inf
+                    // turns an all-NaN block into +inf), then an odd last column.
+                    for ((o, a), b) in row
+                        .iter_mut()
+                        .zip(r0.chunks_exact(2))
+                        .zip(r1.chunks_exact(2))
+                    {
+                        *o = a[0].min(a[1]).min(b[0].min(b[1])).min(f32::INFINITY);
+                    }
+                    if w & 1 == 1 {
+                        row[nw - 1] = r0[w - 1].min(r1[w - 1]).min(f32::INFINITY);
                     }
                 });
             }
-            levels.push((nw as u32, nh as u32, next));
+            levels.push((nw as u32, nh as u32, std::borrow::Cow::Owned(next)));
         }
         MinPyramid { levels }
     }
@@ -1105,7 +1143,7 @@ impl ReceiverDepths {
         settings: &FilterSettings,
     ) -> Vec<Self> {
         let n = views.len();
-        let pyramids: Vec<MinPyramid> = maps.iter().map(MinPyramid::build).collect();
+        let pyramids: Vec<MinPyramid<'_>> = maps.iter().map(MinPyramid::build).collect();
         let view = frame.view;
         let pad = settings.blur / 2 + 1;
         (0..view.position.len())
@@ -1237,15 +1275,18 @@ impl<T: Channel> FilteredMaps<T> {
             settings,
             stats,
             |m, r, y, row| {
-                for (x, texel) in row.chunks_exact_mut(channels).enumerate() {
+                let mut v = vec![0.0f32; row.len()];
+                for (x, texel) in v.chunks_exact_mut(channels).enumerate() {
                     encode(m, r, x as u32, y, texel);
                 }
+                T::store_row(&v, row);
             },
         )
     }
 
-    /// [`Self::build`] with an encoder of whole rows: `encode(map, range, y, row)` writes the
-    /// `width × channels` values of row `y` (zeroed before the call) into `row`.
+    /// [`Self::build`] with an encoder of whole rows that stores the texture's format itself:
+    /// `encode(map, range, y, row)` writes the `width × channels` stored values of row `y`
+    /// into `row` (which holds `T::default()` before the call).
     #[allow(clippy::too_many_arguments)]
     pub fn build_rows(
         frame: &Frame,
@@ -1254,7 +1295,7 @@ impl<T: Channel> FilteredMaps<T> {
         span: f32,
         settings: &FilterSettings,
         stats: &mut Stats,
-        encode: impl Fn(&DepthBuffer, &DepthRange, u32, &mut [f32]) + Sync,
+        encode: impl Fn(&DepthBuffer, &DepthRange, u32, &mut [T]) + Sync,
     ) -> Self {
         let maps = stats.stage("shadow_map", || render_light_maps(frame, res));
         let receivers = stats.stage("fit", || {
@@ -1282,7 +1323,9 @@ impl<T: Channel> FilteredMaps<T> {
                 .iter()
                 .zip(&ranges)
                 .map(|(m, r)| {
-                    Texture::from_rows(m.width, m.height, channels, |y, row| encode(m, r, y, row))
+                    Texture::from_stored_rows(m.width, m.height, channels, |y, row| {
+                        encode(m, r, y, row)
+                    })
                 })
                 .collect()
         });
