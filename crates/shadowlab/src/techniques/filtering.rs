@@ -90,6 +90,17 @@ pub fn fast_floor(x: f32) -> f32 {
     }
 }
 
+/// `x.ceil()` for `|x| < 2³¹` (see [`fast_floor`]).
+#[inline(always)]
+pub fn fast_ceil(x: f32) -> f32 {
+    let t = fast_floor(x);
+    if t < x {
+        t + 1.0
+    } else {
+        t
+    }
+}
+
 /// Storage of one texel channel.
 pub trait Channel: Copy + Default + Send + Sync + 'static {
     /// Bytes per stored value.
@@ -559,7 +570,8 @@ pub fn level_of_detail(fp: &Footprint, side: u32, filter: Filter, max_aniso: u32
             let probes = if pmax <= 1.0 {
                 1
             } else if pmin > 0.0 {
-                ((pmax / pmin).ceil() as u32).clamp(1, max_aniso)
+                // `fast_ceil` saturates like `ceil` then `as` would, past 2³¹ and for NaN.
+                (fast_ceil(pmax / pmin) as u32).clamp(1, max_aniso)
             } else {
                 max_aniso
             };
@@ -1059,7 +1071,14 @@ impl<'a> MinPyramid<'a> {
     /// texels cover it so. Returns the depth and the block read, as level-0 texel bounds
     /// `(x_begin, x_end, y_begin, y_end)` (end exclusive, clamped to the map).
     pub fn min_in(&self, x0: u32, x1: u32, y0: u32, y1: u32) -> (f32, [u32; 4]) {
-        let mut l = 0;
+        // No level finer than ⌊log2(extent)⌋ holds the rectangle in 2 texels a side, and the
+        // test below only turns true once: start there.
+        let extent = (x1 - x0).max(y1 - y0);
+        let mut l = if extent > 1 {
+            (31 - extent.leading_zeros() as usize).min(self.levels.len() - 1)
+        } else {
+            0
+        };
         while l + 1 < self.levels.len() && ((x1 >> l) - (x0 >> l) > 1 || (y1 >> l) - (y0 >> l) > 1)
         {
             l += 1;
@@ -1184,7 +1203,7 @@ impl ReceiverDepths {
                     // bilinear taps of the coarser of the two levels blended (within two of
                     // its texels, 2^⌈λ⌉ level-0 texels each), the blur.
                     let level = if lod.lambda.is_finite() {
-                        lod.lambda.clamp(0.0, 30.0).ceil() as u32
+                        fast_ceil(lod.lambda.clamp(0.0, 30.0)) as u32
                     } else {
                         0
                     };
@@ -1371,12 +1390,12 @@ impl<T: Channel> FilteredMaps<T> {
         test: impl Fn(f32, &[f32]) -> f32 + Sync,
     ) -> Vec<Vec3> {
         let ch = self.chains.first().map_or(1, |c| c.channels());
-        let per_pixel = stats.stage("lookup", || {
+        let (values, codes) = stats.stage("lookup", || {
             with_channels!(ch, lookup_n::<T>, (self, frame, settings, &test))
         });
         // Counters summed in pixel order, so they do not depend on the thread count.
         let (mut lit, mut probes, mut minified) = (0u64, 0u64, 0u64);
-        for &(_, c) in &per_pixel {
+        for &c in &codes {
             if c & 0x7f > 0 {
                 lit += 1;
                 probes += (c & 0x7f) as u64;
@@ -1386,19 +1405,19 @@ impl<T: Channel> FilteredMaps<T> {
         let lit = lit.max(1) as f64;
         stats.count("mean_probes", probes as f64 / lit);
         stats.count("minified_share", minified as f64 / lit);
-        per_pixel.into_iter().map(|(v, _)| v).collect()
+        values
     }
 }
 
 /// The per-pixel look-ups of [`FilteredMaps::lookup`] for maps of `N` channels: each
-/// pixel's shadow term and, packed in a byte, its probe count (low 7 bits, 0 when the
-/// light cannot reach it) and whether it was minified (high bit).
+/// pixel's shadow term and, in a second vector, a byte packing its probe count (low 7 bits,
+/// 0 when the light cannot reach it) and whether it was minified (high bit).
 fn lookup_n<T: Channel, const N: usize>(
     maps: &FilteredMaps<T>,
     frame: &Frame,
     settings: &FilterSettings,
     test: &(impl Fn(f32, &[f32]) -> f32 + Sync),
-) -> Vec<(Vec3, u8)> {
+) -> (Vec<Vec3>, Vec<u8>) {
     let view = frame.view;
     let n = (view.width * view.height) as usize;
     let ch = chans::<N>(maps.chains.first().map_or(1, |c| c.channels()));
@@ -1442,7 +1461,7 @@ fn lookup_n<T: Channel, const N: usize>(
                 )
             },
         )
-        .collect()
+        .unzip()
 }
 
 #[cfg(test)]
