@@ -123,6 +123,14 @@ pub trait Channel: Copy + Default + Send + Sync + 'static {
         }
     }
 
+    /// `acc[i] += w · src[i].to_f32()` along a row.
+    #[inline]
+    fn add_scaled_row(acc: &mut [f32], src: &[Self], w: f32) {
+        for (a, s) in acc.iter_mut().zip(src) {
+            *a += w * s.to_f32();
+        }
+    }
+
     /// Stores a row of numbers, `dst[i] = from_f32(src[i])`, in a loop the compiler can
     /// vectorize.
     #[inline]
@@ -212,6 +220,12 @@ impl Channel for u8 {
         let v: [f32; N] = std::array::from_fn(|c| i32::from(src[c]) as f32);
         for c in 0..N {
             acc[c] += w * v[c];
+        }
+    }
+    #[inline]
+    fn add_scaled_row(acc: &mut [f32], src: &[Self], w: f32) {
+        for (a, s) in acc.iter_mut().zip(src) {
+            *a += w * i32::from(*s) as f32;
         }
     }
     #[inline]
@@ -385,43 +399,40 @@ fn blur_n<T: Channel, const N: usize>(tex: &Texture<T>, n: u32) -> Texture<T> {
     horizontal
         .par_chunks_mut(row_len)
         .enumerate()
-        .for_each(|(y, out)| {
-            let src = &tex.data[y * row_len..(y + 1) * row_len];
-            let mut acc = vec![0.0f32; ch];
-            for x in 0..tw {
-                acc.fill(0.0);
-                for (j, &wj) in w.iter().enumerate() {
-                    let sx = (x + j as i64 - r).clamp(0, tw - 1) as usize;
-                    for (a, s) in acc[..ch].iter_mut().zip(&src[sx * ch..sx * ch + ch]) {
-                        *a += wj * s.to_f32();
+        .for_each_init(
+            || vec![0.0f32; row_len],
+            |sums, (y, out)| {
+                let src = &tex.data[y * row_len..(y + 1) * row_len];
+                sums.fill(0.0);
+                for (x, acc) in (0..tw).zip(sums.chunks_exact_mut(ch)) {
+                    for (j, &wj) in w.iter().enumerate() {
+                        let sx = (x + j as i64 - r).clamp(0, tw - 1) as usize;
+                        let texel = &src[sx * ch..sx * ch + ch];
+                        if N > 0 {
+                            let acc: &mut [f32; N] = acc.try_into().expect("N channels");
+                            T::add_scaled(acc, texel.try_into().expect("N channels"), wj);
+                        } else {
+                            for (a, s) in acc.iter_mut().zip(texel) {
+                                *a += wj * s.to_f32();
+                            }
+                        }
                     }
                 }
-                for (d, a) in out[x as usize * ch..x as usize * ch + ch]
-                    .iter_mut()
-                    .zip(&acc[..ch])
-                {
-                    *d = T::from_f32(*a);
-                }
-            }
-        });
+                T::store_row(sums, out);
+            },
+        );
     let mut data = vec![T::default(); tex.data.len()];
-    data.par_chunks_mut(row_len)
-        .enumerate()
-        .for_each(|(y, out)| {
-            let mut acc = vec![0.0f32; row_len];
+    data.par_chunks_mut(row_len).enumerate().for_each_init(
+        || vec![0.0f32; row_len],
+        |acc, (y, out)| {
+            acc.fill(0.0);
             for (j, &wj) in w.iter().enumerate() {
                 let sy = (y as i64 + j as i64 - r).clamp(0, th - 1) as usize;
-                for (a, s) in acc
-                    .iter_mut()
-                    .zip(&horizontal[sy * row_len..(sy + 1) * row_len])
-                {
-                    *a += wj * s.to_f32();
-                }
+                T::add_scaled_row(acc, &horizontal[sy * row_len..(sy + 1) * row_len], wj);
             }
-            for (d, a) in out.iter_mut().zip(&acc) {
-                *d = T::from_f32(*a);
-            }
-        });
+            T::store_row(acc, out);
+        },
+    );
     Texture { data, ..*tex }
 }
 
@@ -750,13 +761,27 @@ impl<T: Channel> MipChain<T> {
         max_aniso: u32,
         out: &mut [f32],
     ) -> Lod {
-        out.fill(0.0);
         let lod = level_of_detail(
             fp,
             self.levels[0].width.max(self.levels[0].height),
             filter,
             max_aniso,
         );
+        if N > 0 {
+            // A local accumulator the compiler keeps in registers; the sums are the same.
+            let mut acc = [0.0f32; N];
+            self.probes_add_n::<N>(&lod, u, v, &mut acc);
+            out[..N].copy_from_slice(&acc);
+        } else {
+            out.fill(0.0);
+            self.probes_add_n::<N>(&lod, u, v, out);
+        }
+        lod
+    }
+
+    /// Adds the probes of a look-up at `(u, v)` with level of detail `lod` to `out`.
+    #[inline(always)]
+    fn probes_add_n<const N: usize>(&self, lod: &Lod, u: f32, v: f32, out: &mut [f32]) {
         if lod.probes <= 1 {
             self.trilinear_add_n::<N>(lod.lambda, u, v, 1.0, out);
         } else {
@@ -767,7 +792,6 @@ impl<T: Channel> MipChain<T> {
                 self.trilinear_add_n::<N>(lod.lambda, p.x, p.y, w, out);
             }
         }
-        lod
     }
 }
 
