@@ -101,6 +101,10 @@ pub fn fast_ceil(x: f32) -> f32 {
     }
 }
 
+/// Pixels per parallel work item of the per-pixel passes ([`ReceiverDepths::of_frame`],
+/// [`FilteredMaps::lookup`]).
+const PIXEL_CHUNK: usize = 1024;
+
 /// Storage of one texel channel.
 pub trait Channel: Copy + Default + Send + Sync + 'static {
     /// Bytes per stored value.
@@ -1189,87 +1193,93 @@ impl ReceiverDepths {
         let pyramids: Vec<MinPyramid<'_>> = maps.iter().map(MinPyramid::build).collect();
         let view = frame.view;
         let pad = settings.blur / 2 + 1;
-        (0..view.position.len())
+        // One pixel's receiver depths into `acc`; pixels are visited in chunks so the many
+        // pixels the light does not reach cost a test each, not a call each.
+        let visit = |acc: &mut Vec<Self>, k: usize| {
+            if !frame.receiver_lit(k) {
+                return;
+            }
+            let p = view.position[k];
+            let i = match *frame.light {
+                Light::Point { position } => cube_face(p - position),
+                _ => 0,
+            };
+            let (Some(lv), Some(map), Some(pyr)) = (views.get(i), maps.get(i), pyramids.get(i))
+            else {
+                return;
+            };
+            if map.width == 0 || map.height == 0 {
+                return;
+            }
+            let s = lv.project(p);
+            if !(s.u.is_finite() && s.v.is_finite() && s.depth.is_finite()) {
+                return;
+            }
+            let fp = light_footprint(lv, p, view.dpdx[k], view.dpdy[k]);
+            let (w, h) = (map.width as f32, map.height as f32);
+            let lod = level_of_detail(
+                &fp,
+                map.width.max(map.height),
+                settings.filter,
+                settings.max_aniso,
+            );
+            // Half-extents of the support in texels: the probes' parallelogram, the
+            // bilinear taps of the coarser of the two levels blended (within two of
+            // its texels, 2^⌈λ⌉ level-0 texels each), the blur.
+            let level = if lod.lambda.is_finite() {
+                fast_ceil(lod.lambda.clamp(0.0, 30.0)) as u32
+            } else {
+                0
+            };
+            let spill = (2u32 << level) as f32 + pad as f32;
+            let (ex, ey) = if settings.filter == Filter::Anisotropic {
+                (
+                    0.5 * (fp.dx.x.abs() + fp.dy.x.abs()) * w,
+                    0.5 * (fp.dx.y.abs() + fp.dy.y.abs()) * h,
+                )
+            } else {
+                (0.0, 0.0)
+            };
+            let (hx, hy) = (ex + spill, ey + spill);
+            let (cx, cy) = (s.u * w, s.v * h);
+            let clampx = |t: f32| t.clamp(0.0, w - 1.0) as u32;
+            let clampy = |t: f32| t.clamp(0.0, h - 1.0) as u32;
+            let (zmin, b) = pyr.min_in(
+                clampx(fast_floor(cx - hx)),
+                clampx(fast_floor(cx + hx)),
+                clampy(fast_floor(cy - hy)),
+                clampy(fast_floor(cy + hy)),
+            );
+            // The receiver's own depth change across the block read (which holds the
+            // support), from its tangent plane in light space, plus one texel.
+            let bx = (cx - b[0] as f32).max(b[1] as f32 - cx).max(0.0);
+            let by = (cy - b[2] as f32).max(b[3] as f32 - cy).max(0.0);
+            let texel = lv.texel_size(map.width.max(map.height), s.depth);
+            let nl = lv.light_from_world.transform_vector3(view.normal[k]);
+            let slope = (nl.x.abs() * bx + nl.y.abs() * by) * texel;
+            let own = if nl.z.abs() * MAX_RECEIVER_SLOPE >= nl.x.abs().max(nl.y.abs()) {
+                slope / nl.z.abs() + texel
+            } else {
+                f32::NEG_INFINITY
+            };
+            let a = &mut acc[i];
+            a.count += 1;
+            a.far = a.far.max(s.depth);
+            a.near = a.near.min(zmin.min(s.depth));
+            if zmin < s.depth - own {
+                a.shadowable += 1;
+                a.shadowable_far = a.shadowable_far.max(s.depth);
+                a.shadowable_near = a.shadowable_near.min(zmin);
+            }
+        };
+        let len = view.position.len();
+        (0..len.div_ceil(PIXEL_CHUNK))
             .into_par_iter()
-            .with_min_len(4096)
             .fold(
                 || vec![Self::EMPTY; n],
-                |mut acc, k| {
-                    if !frame.receiver_lit(k) {
-                        return acc;
-                    }
-                    let p = view.position[k];
-                    let i = match *frame.light {
-                        Light::Point { position } => cube_face(p - position),
-                        _ => 0,
-                    };
-                    let (Some(lv), Some(map), Some(pyr)) =
-                        (views.get(i), maps.get(i), pyramids.get(i))
-                    else {
-                        return acc;
-                    };
-                    if map.width == 0 || map.height == 0 {
-                        return acc;
-                    }
-                    let s = lv.project(p);
-                    if !(s.u.is_finite() && s.v.is_finite() && s.depth.is_finite()) {
-                        return acc;
-                    }
-                    let fp = light_footprint(lv, p, view.dpdx[k], view.dpdy[k]);
-                    let (w, h) = (map.width as f32, map.height as f32);
-                    let lod = level_of_detail(
-                        &fp,
-                        map.width.max(map.height),
-                        settings.filter,
-                        settings.max_aniso,
-                    );
-                    // Half-extents of the support in texels: the probes' parallelogram, the
-                    // bilinear taps of the coarser of the two levels blended (within two of
-                    // its texels, 2^⌈λ⌉ level-0 texels each), the blur.
-                    let level = if lod.lambda.is_finite() {
-                        fast_ceil(lod.lambda.clamp(0.0, 30.0)) as u32
-                    } else {
-                        0
-                    };
-                    let spill = (2u32 << level) as f32 + pad as f32;
-                    let (ex, ey) = if settings.filter == Filter::Anisotropic {
-                        (
-                            0.5 * (fp.dx.x.abs() + fp.dy.x.abs()) * w,
-                            0.5 * (fp.dx.y.abs() + fp.dy.y.abs()) * h,
-                        )
-                    } else {
-                        (0.0, 0.0)
-                    };
-                    let (hx, hy) = (ex + spill, ey + spill);
-                    let (cx, cy) = (s.u * w, s.v * h);
-                    let clampx = |t: f32| t.clamp(0.0, w - 1.0) as u32;
-                    let clampy = |t: f32| t.clamp(0.0, h - 1.0) as u32;
-                    let (zmin, b) = pyr.min_in(
-                        clampx(fast_floor(cx - hx)),
-                        clampx(fast_floor(cx + hx)),
-                        clampy(fast_floor(cy - hy)),
-                        clampy(fast_floor(cy + hy)),
-                    );
-                    // The receiver's own depth change across the block read (which holds the
-                    // support), from its tangent plane in light space, plus one texel.
-                    let bx = (cx - b[0] as f32).max(b[1] as f32 - cx).max(0.0);
-                    let by = (cy - b[2] as f32).max(b[3] as f32 - cy).max(0.0);
-                    let texel = lv.texel_size(map.width.max(map.height), s.depth);
-                    let nl = lv.light_from_world.transform_vector3(view.normal[k]);
-                    let slope = (nl.x.abs() * bx + nl.y.abs() * by) * texel;
-                    let own = if nl.z.abs() * MAX_RECEIVER_SLOPE >= nl.x.abs().max(nl.y.abs()) {
-                        slope / nl.z.abs() + texel
-                    } else {
-                        f32::NEG_INFINITY
-                    };
-                    let a = &mut acc[i];
-                    a.count += 1;
-                    a.far = a.far.max(s.depth);
-                    a.near = a.near.min(zmin.min(s.depth));
-                    if zmin < s.depth - own {
-                        a.shadowable += 1;
-                        a.shadowable_far = a.shadowable_far.max(s.depth);
-                        a.shadowable_near = a.shadowable_near.min(zmin);
+                |mut acc, c| {
+                    for k in c * PIXEL_CHUNK..((c + 1) * PIXEL_CHUNK).min(len) {
+                        visit(&mut acc, k);
                     }
                     acc
                 },
@@ -1445,47 +1455,47 @@ fn lookup_n<T: Channel, const N: usize>(
     let view = frame.view;
     let n = (view.width * view.height) as usize;
     let ch = chans::<N>(maps.chains.first().map_or(1, |c| c.channels()));
-    (0..n)
-        .into_par_iter()
-        .with_min_len(512)
-        .map_init(
+    let mut values = vec![Vec3::ONE; n];
+    let mut codes = vec![0u8; n];
+    values
+        .par_chunks_mut(PIXEL_CHUNK)
+        .zip(codes.par_chunks_mut(PIXEL_CHUNK))
+        .enumerate()
+        .for_each_init(
             || vec![0.0f32; ch],
-            |buf, k| {
-                if !frame.receiver_lit(k) {
-                    return (
+            |buf, (c, (values, codes))| {
+                for (j, (value, code)) in values.iter_mut().zip(codes).enumerate() {
+                    let k = c * PIXEL_CHUNK + j;
+                    if !frame.receiver_lit(k) {
                         if view.covered(k) {
-                            Vec3::ZERO
-                        } else {
-                            Vec3::ONE
-                        },
-                        0,
+                            *value = Vec3::ZERO;
+                        }
+                        continue;
+                    }
+                    let p = view.position[k];
+                    let i = match *frame.light {
+                        Light::Point { position } => cube_face(p - position),
+                        _ => 0,
+                    };
+                    let lv = &maps.views[i];
+                    let s = lv.project(p);
+                    let fp = light_footprint(lv, p, view.dpdx[k], view.dpdy[k]);
+                    let lod = maps.chains[i].sample_n::<N>(
+                        s.u,
+                        s.v,
+                        &fp,
+                        settings.filter,
+                        settings.max_aniso,
+                        buf,
                     );
+                    let d = maps.ranges[i].normalize(s.depth);
+                    let minified = u8::from(lod.lambda > 0.0);
+                    *value = Vec3::splat(test(d, &buf[..ch]));
+                    *code = lod.probes.clamp(1, 127) as u8 | minified << 7;
                 }
-                let p = view.position[k];
-                let i = match *frame.light {
-                    Light::Point { position } => cube_face(p - position),
-                    _ => 0,
-                };
-                let lv = &maps.views[i];
-                let s = lv.project(p);
-                let fp = light_footprint(lv, p, view.dpdx[k], view.dpdy[k]);
-                let lod = maps.chains[i].sample_n::<N>(
-                    s.u,
-                    s.v,
-                    &fp,
-                    settings.filter,
-                    settings.max_aniso,
-                    buf,
-                );
-                let d = maps.ranges[i].normalize(s.depth);
-                let minified = u8::from(lod.lambda > 0.0);
-                (
-                    Vec3::splat(test(d, &buf[..ch])),
-                    lod.probes.clamp(1, 127) as u8 | minified << 7,
-                )
             },
-        )
-        .unzip()
+        );
+    (values, codes)
 }
 
 #[cfg(test)]
