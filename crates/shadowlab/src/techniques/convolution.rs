@@ -248,14 +248,17 @@ fn encode_row<T: Channel, const M: usize>(
 ) {
     let m = if M > 0 { M } else { m as usize };
     let ch = 2 * m;
+    // Scratch for one block, initialized once per row: lanes past a short last block keep
+    // finite values of the previous block and are never stored.
     let mut stored = [[T::default(); ENCODE_BLOCK]; 2 * MAX_M as usize];
+    let (mut s, mut c) = ([0.0f32; ENCODE_BLOCK], [0.0f32; ENCODE_BLOCK]);
+    let (mut s2, mut c2) = ([0.0f32; ENCODE_BLOCK], [0.0f32; ENCODE_BLOCK]);
+    let (mut es, mut ec) = ([0.0f32; ENCODE_BLOCK], [0.0f32; ENCODE_BLOCK]);
     for (block, out) in depths
         .chunks(ENCODE_BLOCK)
         .zip(row.chunks_mut(ENCODE_BLOCK * ch))
     {
         let n = block.len();
-        let (mut s, mut c) = ([0.0f32; ENCODE_BLOCK], [0.0f32; ENCODE_BLOCK]);
-        let (mut s2, mut c2) = ([0.0f32; ENCODE_BLOCK], [0.0f32; ENCODE_BLOCK]);
         for i in 0..n {
             let (s1, c1) = sin_cos_pi_wide(range.normalize(block[i]));
             s[i] = s1;
@@ -264,7 +267,6 @@ fn encode_row<T: Channel, const M: usize>(
             s2[i] = 2.0 * s1 * c1;
             c2[i] = c1 * c1 - s1 * s1;
         }
-        let (mut es, mut ec) = ([0.0f32; ENCODE_BLOCK], [0.0f32; ENCODE_BLOCK]);
         for pair in stored[..ch].chunks_exact_mut(2) {
             let [qs, qc] = pair else { unreachable!() };
             for i in 0..ENCODE_BLOCK {
