@@ -1620,10 +1620,10 @@ mod tests {
         let mut b = vec![0u8; 32];
         u8::reduce_row_2x2::<2>(&r0, &r1, &mut a, ch);
         for (x, texel) in b.chunks_exact_mut(ch).enumerate() {
-            for c in 0..ch {
+            for (c, t) in texel.iter_mut().enumerate() {
                 let i = 2 * x * ch + c;
                 let sum = r0[i] as f32 + r0[i + ch] as f32 + r1[i] as f32 + r1[i + ch] as f32;
-                texel[c] = u8::from_f32(sum * 0.25);
+                *t = u8::from_f32(sum * 0.25);
             }
         }
         assert_eq!(a, b);
