@@ -107,8 +107,11 @@ fn every_scene_generates_frames_and_shows_shadows() {
             s.lit * 100.0,
             s.shadowed * 100.0
         );
+        // A minified scene is small on screen by design: fence-far sees its bounded yard
+        // from five times the fence scene's distance.
+        let least = if name == "fence-far" { 0.05 } else { 0.20 };
         assert!(
-            s.covered > 0.20,
+            s.covered > least,
             "{name}: the camera sees only {:.1}% of the image",
             s.covered * 100.0
         );

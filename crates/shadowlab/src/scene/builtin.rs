@@ -73,7 +73,7 @@ const SCENES: &[(&str, &str)] = &[
     ),
     (
         "fence-far",
-        "the fence scene seen from far away (minification), with a camera path pulling back (convolution shadow maps, Fig. 10)",
+        "the fence, boxes and wall on a bounded yard seen from five times as far (minified on screen and in the light's map), with a camera path pulling back (convolution shadow maps, Fig. 10)",
     ),
     ("cage", "a cage of thin bars over a plane: thin shadows that alias"),
     (
