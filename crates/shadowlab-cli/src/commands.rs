@@ -189,6 +189,16 @@ fn layers_of(
     })
 }
 
+/// The shaded image of a technique's result (see [`shade_result`]).
+fn shade_shadows(
+    setup: &Setup,
+    view: &ViewSamples,
+    layers: Option<&ViewLayers>,
+    s: &Shadows,
+) -> shade::RgbImage {
+    shade_result(setup, view, layers, &s.visibility, s.layers.as_deref())
+}
+
 /// The shaded image of a result: the layers composited when the frame has them and the
 /// technique shaded them, else the nearest surfaces.
 fn shade_result(
@@ -268,13 +278,7 @@ pub fn render(a: &RenderArgs) -> Result<()> {
         run_frame(&mut run, &frame)?;
         if a.scene.frames > 1 {
             let s = &run.last.as_ref().unwrap().0;
-            let img = shade_result(
-                &setup,
-                &view,
-                layers.as_ref(),
-                &s.visibility,
-                s.layers.as_deref(),
-            );
+            let img = shade_shadows(&setup, &view, layers.as_ref(), s);
             let stem = a.output.with_extension("");
             shade::save_png(&img, Path::new(&format!("{}-{i:04}.png", stem.display())))?;
             if let Some(anim) = animation.as_mut() {
@@ -291,13 +295,7 @@ pub fn render(a: &RenderArgs) -> Result<()> {
     }
     let (camera, view, layers) = last.expect("at least one frame");
     let (shadows, time_ms) = run.last.take().expect("rendered");
-    let img = shade_result(
-        &setup,
-        &view,
-        layers.as_ref(),
-        &shadows.visibility,
-        shadows.layers.as_deref(),
-    );
+    let img = shade_shadows(&setup, &view, layers.as_ref(), &shadows);
     shade::save_png(&img, &a.output)?;
     if let Some(p) = &a.visibility {
         shade::write_visibility_exr(p, &view, &shadows.visibility)?;
@@ -511,13 +509,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             run_frame(run, &frame)?;
             if let Some(anim) = animations.get_mut(r) {
                 let (s, _) = run.last.as_ref().expect("just rendered");
-                let img = shade_result(
-                    &setup,
-                    &view,
-                    layers.as_ref(),
-                    &s.visibility,
-                    s.layers.as_deref(),
-                );
+                let img = shade_shadows(&setup, &view, layers.as_ref(), s);
                 shade::save_png(
                     &img,
                     &a.out
@@ -563,13 +555,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         bar.set_message(format!("writing {}", run.label));
         let m: Metrics = measure(&view, &s.visibility, &ref_vis);
         let file = slug(&run.label);
-        let shaded = shade_result(
-            &setup,
-            &view,
-            layers.as_ref(),
-            &s.visibility,
-            s.layers.as_deref(),
-        );
+        let shaded = shade_shadows(&setup, &view, layers.as_ref(), s);
         let error_img = shade::error_image(&view, &s.visibility, &ref_vis);
         shade::save_png(&shaded, &a.out.join(format!("{file}.png")))?;
         shade::save_png(&error_img, &a.out.join(format!("{file}-error.png")))?;

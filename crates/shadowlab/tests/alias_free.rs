@@ -311,22 +311,7 @@ fn layers_match_brute_force_on_small_random_scenes() {
                 scene.materials[m].transmittance = vec3(0.8, 0.6, 0.7);
             }
         }
-        let dir = vec3(rng.next() - 0.5, 0.4 + rng.next(), rng.next() - 0.5).normalize();
-        let mut camera = Camera::look_at(dir * 6.0, Vec3::ZERO, 50.0, 80, 60);
-        camera.fit_depth_range(&scene.bounds);
-        let light = match trial % 3 {
-            0 => Light::Directional {
-                to_light: vec3(rng.next() - 0.5, 1.0, rng.next() - 0.5).normalize(),
-            },
-            1 => Light::Spot {
-                position: vec3(rng.next() - 0.5, 2.5, rng.next() - 0.5) * 2.0,
-                target: rng.v() * 0.5,
-                fov_deg: 40.0 + 80.0 * rng.next(),
-            },
-            _ => Light::Point {
-                position: rng.v() * 0.5,
-            },
-        };
+        let (camera, light) = random_view(&mut rng, trial, &scene, 80, 60);
         let view = ViewSamples::render(&scene, &camera);
         let layers = ViewLayers::render(&scene, &camera, &view).unwrap();
         let frame = Frame::new(&scene, &camera, &light, &view).with_layers(&layers);
@@ -423,6 +408,30 @@ fn random_scene(rng: &mut Lcg, count: usize, glass: bool) -> Scene {
     s
 }
 
+/// A camera looking at the random scene from above at a random angle, and a directional,
+/// spot or point light (by `trial`) placed at random.
+fn random_view(rng: &mut Lcg, trial: usize, scene: &Scene, w: u32, h: u32) -> (Camera, Light) {
+    let dir = vec3(rng.next() - 0.5, 0.4 + rng.next(), rng.next() - 0.5).normalize();
+    let mut camera = Camera::look_at(dir * 6.0, Vec3::ZERO, 50.0, w, h);
+    camera.fit_depth_range(&scene.bounds);
+    let light = match trial % 3 {
+        0 => Light::Directional {
+            to_light: vec3(rng.next() - 0.5, 1.0, rng.next() - 0.5).normalize(),
+        },
+        1 => Light::Spot {
+            position: vec3(rng.next() - 0.5, 2.5, rng.next() - 0.5) * 2.0,
+            target: rng.v() * 0.5,
+            fov_deg: 40.0 + 80.0 * rng.next(),
+        },
+        // Inside the cloud of triangles: casters on every cube face, some crossing the
+        // faces' planes.
+        _ => Light::Point {
+            position: rng.v() * 0.5,
+        },
+    };
+    (camera, light)
+}
+
 /// Every sample against every triangle, the ray formed as the reference forms it.
 fn brute_force(frame: &Frame) -> Vec<Vec3> {
     let view = frame.view;
@@ -450,27 +459,7 @@ fn matches_brute_force_on_every_pixel_of_small_random_scenes() {
     let (mut dark, mut partial) = (0usize, 0usize);
     for trial in 0..18 {
         let scene = random_scene(&mut rng, 40 + 40 * (trial % 4), trial % 2 == 1);
-        let dir = vec3(rng.next() - 0.5, 0.4 + rng.next(), rng.next() - 0.5).normalize();
-        let camera = {
-            let mut c = Camera::look_at(dir * 6.0, Vec3::ZERO, 50.0, 96, 72);
-            c.fit_depth_range(&scene.bounds);
-            c
-        };
-        let light = match trial % 3 {
-            0 => Light::Directional {
-                to_light: vec3(rng.next() - 0.5, 1.0, rng.next() - 0.5).normalize(),
-            },
-            1 => Light::Spot {
-                position: vec3(rng.next() - 0.5, 2.5, rng.next() - 0.5) * 2.0,
-                target: rng.v() * 0.5,
-                fov_deg: 40.0 + 80.0 * rng.next(),
-            },
-            // Inside the cloud of triangles: casters on every cube face, some crossing
-            // the faces' planes.
-            _ => Light::Point {
-                position: rng.v() * 0.5,
-            },
-        };
+        let (camera, light) = random_view(&mut rng, trial, &scene, 96, 72);
         let view = ViewSamples::render(&scene, &camera);
         let frame = Frame::new(&scene, &camera, &light, &view);
         let expected = brute_force(&frame);

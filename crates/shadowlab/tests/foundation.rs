@@ -127,31 +127,37 @@ fn shadow_maps_agree_with_reference_for_every_light_kind() {
     }
 }
 
+/// An opaque floor (quad at y = 0, half-side 4) under a red sheet (y = 1, half-side 1) and
+/// a blue one (y = 2, half-side 0.5) with the given transmittances and colours, two
+/// triangles each (so triangle / 2 is the quad); a camera looking straight down and a
+/// light straight above.
+fn sheets(floor: Vec3, transmittance: [Vec3; 2], color: [Vec3; 2]) -> (Scene, Camera, Light) {
+    let mut s = Scene::new("sheets");
+    let mut m = vec![s.add_material(Material::opaque("floor", floor))];
+    for (i, name) in ["red", "blue"].into_iter().enumerate() {
+        m.push(s.add_material(Material {
+            name: name.into(),
+            color: color[i],
+            transmittance: transmittance[i],
+        }));
+    }
+    for (i, (y, h)) in [(0.0, 4.0), (1.0, 1.0), (2.0, 0.5)].into_iter().enumerate() {
+        s.push([vec3(-h, y, -h), vec3(h, y, h), vec3(h, y, -h)], m[i]);
+        s.push([vec3(-h, y, -h), vec3(-h, y, h), vec3(h, y, h)], m[i]);
+    }
+    let mut c = Camera::look_at(vec3(0.0, 8.0, 0.01), Vec3::ZERO, 40.0, 64, 64);
+    c.fit_depth_range(&s.bounds);
+    (s, c, Light::Directional { to_light: Vec3::Y })
+}
+
 #[test]
 fn semi_transparent_casters_multiply_their_transmittance() {
     // Two tinted sheets over a floor: the floor under both gets the product of the tints.
-    let mut s = Scene::new("sheets");
-    let floor = s.add_material(Material::default());
-    let red = s.add_material(Material {
-        name: "red".into(),
-        color: Vec3::ONE,
-        transmittance: vec3(0.9, 0.2, 0.2),
-    });
-    let blue = s.add_material(Material {
-        name: "blue".into(),
-        color: Vec3::ONE,
-        transmittance: vec3(0.3, 0.3, 0.8),
-    });
-    let quad = |s: &mut Scene, y: f32, h: f32, m: u32| {
-        s.push([vec3(-h, y, -h), vec3(h, y, h), vec3(h, y, -h)], m);
-        s.push([vec3(-h, y, -h), vec3(-h, y, h), vec3(h, y, h)], m);
-    };
-    quad(&mut s, 0.0, 4.0, floor);
-    quad(&mut s, 1.0, 1.0, red);
-    quad(&mut s, 2.0, 0.5, blue);
-    let mut c = Camera::look_at(vec3(0.0, 8.0, 0.01), Vec3::ZERO, 40.0, 64, 64);
-    c.fit_depth_range(&s.bounds);
-    let l = Light::Directional { to_light: Vec3::Y };
+    let (s, c, l) = sheets(
+        Vec3::ONE,
+        [vec3(0.9, 0.2, 0.2), vec3(0.3, 0.3, 0.8)],
+        [Vec3::ONE, Vec3::ONE],
+    );
     let view = ViewSamples::render(&s, &c);
     let frame = Frame::new(&s, &c, &l, &view);
     let v = Reference::build(&s).visibility(&frame, &[vec2(0.5, 0.5)]);
@@ -169,28 +175,11 @@ fn semi_transparent_casters_multiply_their_transmittance() {
 fn layers_behind_semi_transparent_surfaces_composite_front_to_back() {
     // A red sheet over a floor with a blue sheet above it, seen from above; the light
     // shines from straight above.
-    let mut s = Scene::new("sheets");
-    let floor = s.add_material(Material::opaque("floor", vec3(0.8, 0.8, 0.8)));
-    let red = s.add_material(Material {
-        name: "red".into(),
-        color: vec3(1.0, 0.1, 0.1),
-        transmittance: vec3(0.6, 0.3, 0.3),
-    });
-    let blue = s.add_material(Material {
-        name: "blue".into(),
-        color: vec3(0.1, 0.1, 1.0),
-        transmittance: vec3(0.2, 0.2, 0.7),
-    });
-    let quad = |s: &mut Scene, y: f32, h: f32, m: u32| {
-        s.push([vec3(-h, y, -h), vec3(h, y, h), vec3(h, y, -h)], m);
-        s.push([vec3(-h, y, -h), vec3(-h, y, h), vec3(h, y, h)], m);
-    };
-    quad(&mut s, 0.0, 4.0, floor);
-    quad(&mut s, 1.0, 1.0, red);
-    quad(&mut s, 2.0, 0.5, blue);
-    let mut c = Camera::look_at(vec3(0.0, 8.0, 0.01), Vec3::ZERO, 40.0, 64, 64);
-    c.fit_depth_range(&s.bounds);
-    let l = Light::Directional { to_light: Vec3::Y };
+    let (s, c, l) = sheets(
+        vec3(0.8, 0.8, 0.8),
+        [vec3(0.6, 0.3, 0.3), vec3(0.2, 0.2, 0.7)],
+        [vec3(1.0, 0.1, 0.1), vec3(0.1, 0.1, 1.0)],
+    );
     let view = ViewSamples::render(&s, &c);
     let layers = ViewLayers::render(&s, &c, &view).unwrap();
     let frame = Frame::new(&s, &c, &l, &view).with_layers(&layers);
