@@ -173,13 +173,9 @@ impl Expansion {
     }
 }
 
-/// `sin(πx)` and `cos(πx)` for `|x| < 2³¹`: reduction to `r = x − round(x)` and Taylor polynomials of
-/// degree 11 and 12 on `πr ∈ [−π/2, π/2]` (error below 2·10⁻⁷, several times faster than
-/// two library calls; the basis of a 2048² map needs one pair per texel).
+/// `sin r` and `cos r` for `r ∈ [−π/2, π/2]` by Taylor polynomials of degree 11 and 12.
 #[inline(always)]
-pub fn sin_cos_pi(x: f32) -> (f32, f32) {
-    let n = super::filtering::fast_floor(x + 0.5);
-    let r = (x - n) * PI;
+fn sin_cos_taylor(r: f32) -> (f32, f32) {
     let r2 = r * r;
     let s = r
         * (1.0
@@ -192,6 +188,16 @@ pub fn sin_cos_pi(x: f32) -> (f32, f32) {
                 + r2 * (-1.0 / 720.0
                     + r2 * (1.0 / 40_320.0
                         + r2 * (-1.0 / 3_628_800.0 + r2 * (1.0 / 479_001_600.0))))));
+    (s, c)
+}
+
+/// `sin(πx)` and `cos(πx)` for `|x| < 2³¹`: reduction to `r = x − round(x)` and Taylor polynomials of
+/// degree 11 and 12 on `πr ∈ [−π/2, π/2]` (error below 2·10⁻⁷, several times faster than
+/// two library calls; the basis of a 2048² map needs one pair per texel).
+#[inline(always)]
+pub fn sin_cos_pi(x: f32) -> (f32, f32) {
+    let n = super::filtering::fast_floor(x + 0.5);
+    let (s, c) = sin_cos_taylor((x - n) * PI);
     // An odd number of half-turns flips both.
     if (n as i64) & 1 == 0 {
         (s, c)
@@ -213,19 +219,7 @@ fn sin_cos_pi_wide(x: f32) -> (f32, f32) {
     let up = rounded > y;
     let n = if up { rounded - 1.0 } else { rounded };
     let odd = (t.to_bits() ^ u32::from(up)) & 1;
-    let r = (x - n) * PI;
-    let r2 = r * r;
-    let s = r
-        * (1.0
-            + r2 * (-1.0 / 6.0
-                + r2 * (1.0 / 120.0
-                    + r2 * (-1.0 / 5040.0 + r2 * (1.0 / 362_880.0 + r2 * (-1.0 / 39_916_800.0))))));
-    let c = 1.0
-        + r2 * (-0.5
-            + r2 * (1.0 / 24.0
-                + r2 * (-1.0 / 720.0
-                    + r2 * (1.0 / 40_320.0
-                        + r2 * (-1.0 / 3_628_800.0 + r2 * (1.0 / 479_001_600.0))))));
+    let (s, c) = sin_cos_taylor((x - n) * PI);
     let flip = odd << 31;
     (
         f32::from_bits(s.to_bits() ^ flip),
