@@ -694,3 +694,20 @@ fn profile_random_triangles() {
         );
     }
 }
+
+#[test]
+fn one_technique_reused_across_frames_answers_as_a_fresh_one() {
+    // afsm keeps its per-sample buffers between frames: frames of different sizes and light
+    // kinds (one plane, six cube faces) must not see each other's leftovers.
+    let scene = scene::load("bunny", &BTreeMap::new()).unwrap();
+    let mut reused = techniques::create("afsm").unwrap();
+    for (i, light) in lights_for(&scene).into_iter().cycle().take(5).enumerate() {
+        let camera = camera_for(&scene, 160 + 40 * (i as u32 % 2), 120);
+        let view = ViewSamples::render(&scene, &camera);
+        let frame = Frame::new(&scene, &camera, &light, &view);
+        let fresh = afsm(&frame, &[]);
+        let again = reused.render(&frame).unwrap();
+        assert_eq!(again.visibility, fresh.visibility, "frame {i}");
+        assert_eq!(again.stats.counters, fresh.stats.counters, "frame {i}");
+    }
+}

@@ -102,14 +102,52 @@ const BIN_CHUNK: usize = 8 * 1024;
 pub struct AliasFree {
     /// A BSP leaf holds at most this many samples.
     pub leaf_size: u32,
+    /// The per-sample buffers of the last frame, kept so the next frame writes into memory
+    /// that is already mapped instead of page-faulting tens of megabytes in again.
+    buffers: Buffers,
 }
 
 impl Default for AliasFree {
     fn default() -> Self {
         AliasFree {
             leaf_size: DEFAULT_LEAF_SIZE,
+            buffers: Buffers::default(),
         }
     }
+}
+
+/// Spare vectors of one element type, handed out emptied and taken back after the frame.
+#[derive(Clone, Debug)]
+struct Pool<T>(Vec<Vec<T>>);
+
+impl<T> Default for Pool<T> {
+    fn default() -> Self {
+        Pool(Vec::new())
+    }
+}
+
+impl<T> Pool<T> {
+    /// An empty vector, with the capacity of one given back earlier when there is one.
+    fn take(&mut self) -> Vec<T> {
+        let mut v = self.0.pop().unwrap_or_default();
+        v.clear();
+        v
+    }
+
+    fn give(&mut self, v: Vec<T>) {
+        self.0.push(v);
+    }
+}
+
+/// The per-frame buffers, one pool per element type.
+#[derive(Clone, Debug, Default)]
+struct Buffers {
+    rays: Pool<ShadowRay>,
+    pts: Pool<Pt>,
+    bytes: Pool<u8>,
+    coords: Pool<f32>,
+    vis: Pool<Vec3>,
+    flags: Pool<bool>,
 }
 
 impl ShadowTechnique for AliasFree {
@@ -141,11 +179,16 @@ impl ShadowTechnique for AliasFree {
         frame.light.validate()?;
         let mut stats = Stats::default();
         let leaf = self.leaf_size.max(1) as usize;
-        let planes = stats.stage("transform", || transform(frame));
+        let buf = &mut self.buffers;
+        let planes = stats.stage("transform", || transform(frame, buf));
         let trees: Vec<Bsp> = stats.stage("bsp", || {
-            planes.into_iter().map(|p| Bsp::build(p, leaf)).collect()
+            planes
+                .into_iter()
+                .map(|p| Bsp::build(p, leaf, buf))
+                .collect()
         });
-        let (visibility, layers, counters) = stats.stage("raster", || rasterize(frame, &trees));
+        let (visibility, layers, counters) =
+            stats.stage("raster", || rasterize(frame, &trees, buf));
         let nodes: usize = trees.iter().map(|t| t.nodes.len()).sum();
         let samples: usize = trees.iter().map(|t| t.su.len()).sum();
         stats.count("samples", samples as f64);
@@ -165,6 +208,9 @@ impl ShadowTechnique for AliasFree {
             for (i, t) in trees.iter().enumerate() {
                 dump_bsp(&dir.join(format!("afsm-bsp{i}.png")), t)?;
             }
+        }
+        for t in trees {
+            t.recycle(&mut self.buffers);
         }
         Ok(Shadows {
             layers,
@@ -370,6 +416,7 @@ fn shadow_rays(
     frame: &Frame,
     proj: Option<&Projection>,
     cube: &[Projection; 6],
+    buf: &mut Buffers,
 ) -> (Vec<ShadowRay>, Vec<Pt>, Vec<u8>) {
     let view = frame.view;
     let light = frame.light;
@@ -399,17 +446,18 @@ fn shadow_rays(
         .collect();
     let total: usize = counts.iter().sum();
     let placeholder = ShadowRay::new(Vec3::ZERO, Vec3::Z, 0.0, 0, 0);
-    let mut rays = vec![placeholder; total];
-    let mut pts = vec![
-        Pt {
-            u: 0.0,
-            v: 0.0,
-            z: 0.0,
-            id: 0
-        };
-        total
-    ];
-    let mut face = vec![0u8; total];
+    let mut rays = buf.rays.take();
+    rays.resize(total, placeholder);
+    let mut pts = buf.pts.take();
+    let origin = Pt {
+        u: 0.0,
+        v: 0.0,
+        z: 0.0,
+        id: 0,
+    };
+    pts.resize(total, origin);
+    let mut face = buf.bytes.take();
+    face.resize(total, 0);
     let mut jobs = Vec::with_capacity(counts.len());
     {
         let (mut r, mut p, mut f) = (&mut rays[..], &mut pts[..], &mut face[..]);
@@ -473,7 +521,7 @@ fn cube_projections(l: Vec3) -> [Projection; 6] {
 }
 
 /// The lit samples grouped into light image planes.
-fn transform(frame: &Frame) -> Vec<Plane> {
+fn transform(frame: &Frame, buf: &mut Buffers) -> Vec<Plane> {
     let light = frame.light;
     let scene_bounds = frame.scene.bounds;
     match *light {
@@ -483,7 +531,9 @@ fn transform(frame: &Frame) -> Vec<Plane> {
             let t = s.cross(w);
             let c = scene_bounds.center();
             let proj = Projection::Ortho { c, s, t, w };
-            let (rays, pts, _) = shadow_rays(frame, Some(&proj), &cube_projections(Vec3::ZERO));
+            let (rays, pts, face) =
+                shadow_rays(frame, Some(&proj), &cube_projections(Vec3::ZERO), buf);
+            buf.bytes.give(face);
             vec![Plane {
                 proj,
                 pts,
@@ -504,7 +554,8 @@ fn transform(frame: &Frame) -> Vec<Plane> {
                 f,
             };
             let cube = cube_projections(position);
-            let (rays, pts, _) = shadow_rays(frame, Some(&proj), &cube);
+            let (rays, pts, face) = shadow_rays(frame, Some(&proj), &cube, buf);
+            buf.bytes.give(face);
             if pts.iter().all(|p| p.z.is_finite()) {
                 let scale = perspective_scale(position, &rays, &scene_bounds);
                 vec![Plane {
@@ -516,14 +567,16 @@ fn transform(frame: &Frame) -> Vec<Plane> {
             } else {
                 // A sample at or behind the spot's own plane (impossible inside its cone,
                 // but cheap to be sure of): use the cube of a point light instead.
-                let (rays, pts, face) = shadow_rays(frame, None, &cube);
-                cube_planes(position, rays, pts, face, &scene_bounds)
+                buf.rays.give(rays);
+                buf.pts.give(pts);
+                let (rays, pts, face) = shadow_rays(frame, None, &cube, buf);
+                cube_planes(position, rays, pts, face, &scene_bounds, buf)
             }
         }
         Light::Point { position } => {
             let cube = cube_projections(position);
-            let (rays, pts, face) = shadow_rays(frame, None, &cube);
-            cube_planes(position, rays, pts, face, &scene_bounds)
+            let (rays, pts, face) = shadow_rays(frame, None, &cube, buf);
+            cube_planes(position, rays, pts, face, &scene_bounds, buf)
         }
     }
 }
@@ -549,6 +602,7 @@ fn cube_planes(
     pts: Vec<Pt>,
     face: Vec<u8>,
     scene: &Aabb,
+    buf: &mut Buffers,
 ) -> Vec<Plane> {
     let scale = perspective_scale(l, &rays, scene);
     let cube = cube_projections(l);
@@ -557,14 +611,20 @@ fn cube_planes(
         count[f as usize] += 1;
     }
     let mut planes: Vec<Plane> = (0..6)
-        .map(|f| Plane {
-            proj: cube[f],
-            pts: Vec::with_capacity(count[f]),
-            rays: Vec::with_capacity(count[f]),
-            scale,
+        .map(|f| {
+            let (mut pts, mut rays) = (buf.pts.take(), buf.rays.take());
+            pts.reserve(count[f]);
+            rays.reserve(count[f]);
+            Plane {
+                proj: cube[f],
+                pts,
+                rays,
+                scale,
+            }
         })
         .collect();
-    for ((r, mut p), f) in rays.into_iter().zip(pts).zip(face) {
+    for ((r, p), &f) in rays.iter().zip(&pts).zip(&face) {
+        let (r, mut p) = (*r, *p);
         let plane = &mut planes[f as usize];
         p.id = plane.rays.len() as u32;
         if !p.z.is_finite() {
@@ -580,8 +640,16 @@ fn cube_planes(
         plane.rays.push(r);
         plane.pts.push(p);
     }
-    planes.retain(|p| !p.pts.is_empty());
-    planes
+    buf.rays.give(rays);
+    buf.pts.give(pts);
+    buf.bytes.give(face);
+    let (kept, empty): (Vec<Plane>, Vec<Plane>) =
+        planes.into_iter().partition(|p| !p.pts.is_empty());
+    for p in empty {
+        buf.rays.give(p.rays);
+        buf.pts.give(p.pts);
+    }
+    kept
 }
 
 // ---------------------------------------------------------------------------------------
@@ -647,7 +715,7 @@ fn node_count(len: usize, leaf: usize, memo: &mut HashMap<usize, usize>) -> usiz
 }
 
 impl Bsp {
-    fn build(plane: Plane, leaf: usize) -> Bsp {
+    fn build(plane: Plane, leaf: usize, buf: &mut Buffers) -> Bsp {
         let Plane {
             proj,
             mut pts,
@@ -677,14 +745,19 @@ impl Bsp {
             depth[i] = depth[parent[i] as usize] + 1;
         }
         // Coordinates and shadow rays in leaf order, so a leaf reads them contiguously.
-        let su = pts.par_iter().with_min_len(4096).map(|p| p.u).collect();
-        let sv = pts.par_iter().with_min_len(4096).map(|p| p.v).collect();
-        let sz = pts.par_iter().with_min_len(4096).map(|p| p.z).collect();
-        let rays = pts
-            .par_iter()
-            .with_min_len(4096)
-            .map(|p| rays[p.id as usize])
-            .collect();
+        let (mut su, mut sv, mut sz) = (buf.coords.take(), buf.coords.take(), buf.coords.take());
+        su.par_extend(pts.par_iter().with_min_len(4096).map(|p| p.u));
+        sv.par_extend(pts.par_iter().with_min_len(4096).map(|p| p.v));
+        sz.par_extend(pts.par_iter().with_min_len(4096).map(|p| p.z));
+        let mut leaf_rays = buf.rays.take();
+        leaf_rays.par_extend(
+            pts.par_iter()
+                .with_min_len(4096)
+                .map(|p| rays[p.id as usize]),
+        );
+        buf.rays.give(rays);
+        buf.pts.give(pts);
+        let rays = leaf_rays;
         Bsp {
             proj,
             scale,
@@ -699,6 +772,14 @@ impl Bsp {
             rays,
             grid,
         }
+    }
+
+    /// Hands the per-sample vectors back for the next frame.
+    fn recycle(self, buf: &mut Buffers) {
+        buf.coords.give(self.su);
+        buf.coords.give(self.sv);
+        buf.coords.give(self.sz);
+        buf.rays.give(self.rays);
     }
 
     /// The largest |(u, v, 1)| over the plane's samples.
@@ -1444,7 +1525,11 @@ fn bin(bsp: &Bsp, t: &TriSetup, out: &mut [Vec<TriSetup>], visited: &mut u64) {
 
 /// Rasterizes every triangle into every plane's BSP and writes the shadow terms to pixels
 /// (and to the layer samples, when the frame has layers).
-fn rasterize(frame: &Frame, trees: &[Bsp]) -> (Visibility, Option<Vec<Vec3>>, Counters) {
+fn rasterize(
+    frame: &Frame,
+    trees: &[Bsp],
+    buf: &mut Buffers,
+) -> (Visibility, Option<Vec<Vec3>>, Counters) {
     let view = frame.view;
     let scene = frame.scene;
     let mut out = Visibility::lit(view.width, view.height);
@@ -1501,8 +1586,10 @@ fn rasterize(frame: &Frame, trees: &[Bsp]) -> (Visibility, Option<Vec<Vec3>>, Co
         }
         // Each unit owns a contiguous run of samples and of nodes.
         let n = bsp.su.len();
-        let mut vis = vec![Vec3::ONE; n];
-        let mut alive = vec![true; n];
+        let mut vis = buf.vis.take();
+        vis.resize(n, Vec3::ONE);
+        let mut alive = buf.flags.take();
+        alive.resize(n, true);
         let mut work = Vec::with_capacity(units);
         {
             let (mut vr, mut ar) = (&mut vis[..], &mut alive[..]);
@@ -1553,6 +1640,8 @@ fn rasterize(frame: &Frame, trees: &[Bsp]) -> (Visibility, Option<Vec<Vec3>>, Co
                 _ => out.value[k] = *v,
             }
         }
+        buf.vis.give(vis);
+        buf.flags.give(alive);
     }
     (out, layer_out, total)
 }
@@ -1634,6 +1723,7 @@ mod tests {
                     scale: 1.0,
                 },
                 leaf,
+                &mut Buffers::default(),
             );
             let mut ids: Vec<u32> = bsp.rays.iter().map(|r| r.pixel).collect();
             for (i, &id) in ids.iter().enumerate() {
