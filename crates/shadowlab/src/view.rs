@@ -227,9 +227,10 @@ pub struct ViewLayers {
 
 impl ViewLayers {
     /// Collects the layers behind the semi-transparent nearest surfaces of `view` (empty
-    /// when the scene is opaque). The rasterizer gathers every fragment behind such a
-    /// surface (an A-buffer per tile); fragments are ordered by depth, ties by triangle
-    /// index, the order of the camera pass's own depth test.
+    /// when the scene is opaque). The rasterizer gathers every fragment of the pixels that
+    /// see such a surface (an A-buffer per tile); fragments are ordered by depth, ties by
+    /// triangle index, the order of the camera pass's own depth test, whose winner comes
+    /// first and is skipped.
     pub fn render(scene: &Scene, camera: &Camera, view: &ViewSamples) -> Result<Self> {
         let t0 = std::time::Instant::now();
         let (w, h) = (camera.width, camera.height);
@@ -247,10 +248,10 @@ impl ViewLayers {
             let c = scene.triangle(i).map(|p| clip_from_world * p.extend(1.0));
             (c, c.map(|c| c.w))
         });
-        let front = raster::depth_buffer(&setups, w, h);
         let see_through =
             |k: usize| view.covered(k) && !scene.material_of(view.triangle[k] as usize).is_opaque();
-        // Every fragment behind a see-through nearest surface: (pixel, depth, triangle).
+        // Every fragment of a pixel whose nearest surface is see-through, that surface's own
+        // included: (pixel, depth, triangle).
         let tiles = raster::rasterize(
             &setups,
             w,
@@ -258,11 +259,7 @@ impl ViewLayers {
             |_| Vec::new(),
             |frags: &mut Vec<(u32, f32, u32)>, _, f| {
                 let k = (f.y * w + f.x) as usize;
-                if !see_through(k) {
-                    return;
-                }
-                let (d0, id0) = (front.depth[k], front.id[k]);
-                if f.id != id0 && (f.depth > d0 || (f.depth == d0 && f.id > id0)) {
+                if see_through(k) {
                     frags.push((k as u32, f.depth, f.id));
                 }
             },
@@ -270,7 +267,7 @@ impl ViewLayers {
         let total: usize = tiles.iter().map(|(_, f)| f.len()).sum();
         if total > MAX_LAYER_SAMPLES {
             return Err(Error::Limit(format!(
-                "the semi-transparent surfaces of scene {:?} put {total} surfaces behind the nearest ones, above the limit of {MAX_LAYER_SAMPLES} layer samples; lower the resolution (--width/--height)",
+                "the semi-transparent surfaces of scene {:?} put {total} surfaces under the pixels that see through them, above the limit of {MAX_LAYER_SAMPLES} layer samples; lower the resolution (--width/--height)",
                 scene.name
             )));
         }
@@ -281,11 +278,15 @@ impl ViewLayers {
         frags.par_sort_unstable_by(|a, b| {
             a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2))
         });
-        // Keep each pixel's fragments down to its first opaque one.
+        // Each pixel's first fragment in (depth, triangle) order is the camera pass's own
+        // (its depth test keeps the nearest, ties to the lower index); keep the ones after
+        // it down to the first opaque one.
         let mut kept = Vec::with_capacity(frags.len());
         let mut i = 0;
         while i < frags.len() {
             let k = frags[i].0;
+            debug_assert_eq!(frags[i].2, view.triangle[k as usize]);
+            i += 1;
             while i < frags.len() && frags[i].0 == k {
                 kept.push(frags[i]);
                 let opaque = scene.material_of(frags[i].2 as usize).is_opaque();
