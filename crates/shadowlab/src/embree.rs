@@ -84,9 +84,9 @@ extern "C" {
     fn rtcOccluded1(scene: RTCScene, context: *mut RTCIntersectContext, ray: *mut RTCRay);
 }
 
-/// An Embree device and scene over a [`Scene`]'s triangles, ready for occlusion rays.
-pub struct EmbreeScene<'s> {
-    scene: &'s Scene,
+/// An Embree device and scene over a copy of a [`Scene`]'s triangles, ready for occlusion
+/// rays.
+pub struct EmbreeScene {
     device: RTCDevice,
     handle: RTCScene,
     /// BVH build time (geometry upload and commit) in milliseconds.
@@ -95,8 +95,8 @@ pub struct EmbreeScene<'s> {
 
 // Embree scenes are safe to query from many threads at once once committed; the device
 // and scene handles are only released in `drop`.
-unsafe impl Send for EmbreeScene<'_> {}
-unsafe impl Sync for EmbreeScene<'_> {}
+unsafe impl Send for EmbreeScene {}
+unsafe impl Sync for EmbreeScene {}
 
 fn device_error(device: RTCDevice, what: &str) -> Result<()> {
     // SAFETY: `device` is a live device handle.
@@ -110,10 +110,10 @@ fn device_error(device: RTCDevice, what: &str) -> Result<()> {
     }
 }
 
-impl<'s> EmbreeScene<'s> {
+impl EmbreeScene {
     /// Creates a device (`threads` build threads; 0 lets Embree choose) and builds its BVH
     /// over every triangle of `scene`.
-    pub fn build(scene: &'s Scene, threads: usize) -> Result<Self> {
+    pub fn build(scene: &Scene, threads: usize) -> Result<Self> {
         let config = format!("threads={threads}\0");
         let config = CStr::from_bytes_with_nul(config.as_bytes()).expect("one trailing NUL");
         // SAFETY: a NUL-terminated configuration string.
@@ -170,7 +170,6 @@ impl<'s> EmbreeScene<'s> {
             handle
         };
         let built = EmbreeScene {
-            scene,
             device,
             handle,
             build_ms: t0.elapsed().as_secs_f64() * 1e3,
@@ -233,14 +232,9 @@ impl<'s> EmbreeScene<'s> {
             value,
         }
     }
-
-    /// The scene the BVH was built over.
-    pub fn scene(&self) -> &'s Scene {
-        self.scene
-    }
 }
 
-impl Drop for EmbreeScene<'_> {
+impl Drop for EmbreeScene {
     fn drop(&mut self) {
         // SAFETY: both handles are live and released once.
         unsafe {
