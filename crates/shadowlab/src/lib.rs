@@ -38,8 +38,9 @@
 //! let shadows = technique.render(&frame).unwrap();
 //! assert_eq!(shadows.visibility.width, 64);
 //! ```
-#![cfg_attr(not(feature = "embree"), forbid(unsafe_code))]
-#![cfg_attr(feature = "embree", deny(unsafe_code))]
+// Unsafe code is allowed in two places only: the Embree bindings (an optional feature) and
+// the calls into functions compiled for an instruction set the processor was checked for.
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod camera;

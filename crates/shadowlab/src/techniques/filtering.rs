@@ -1320,35 +1320,33 @@ impl<T: Channel> FilteredMaps<T> {
         stats: &mut Stats,
         encode: impl Fn(&DepthBuffer, &DepthRange, u32, u32, &mut [f32]) + Sync,
     ) -> Self {
-        Self::build_rows(
-            frame,
-            res,
-            channels,
-            span,
-            settings,
-            stats,
-            |m, r, y, row| {
+        let encode = &encode;
+        Self::build_rows(frame, res, channels, span, settings, stats, |r| {
+            let r = *r;
+            move |m: &DepthBuffer, y: u32, row: &mut [T]| {
                 let mut v = vec![0.0f32; row.len()];
                 for (x, texel) in v.chunks_exact_mut(channels).enumerate() {
-                    encode(m, r, x as u32, y, texel);
+                    encode(m, &r, x as u32, y, texel);
                 }
                 T::store_row(&v, row);
-            },
-        )
+            }
+        })
     }
 
     /// [`Self::build`] with an encoder of whole rows that stores the texture's format itself:
-    /// `encode(map, range, y, row)` writes the `width × channels` stored values of row `y`
-    /// into `row` (which holds `T::default()` before the call).
+    /// `encoder(range)` is called once per view, inside the `encode` stage (so it may
+    /// prepare tables for that view's depth range), and returns `encode(map, y, row)`, which
+    /// writes the `width × channels` stored values of row `y` into `row` (which holds
+    /// `T::default()` before the call).
     #[allow(clippy::too_many_arguments)]
-    pub fn build_rows(
+    pub fn build_rows<E: Fn(&DepthBuffer, u32, &mut [T]) + Sync>(
         frame: &Frame,
         res: u32,
         channels: usize,
         span: f32,
         settings: &FilterSettings,
         stats: &mut Stats,
-        encode: impl Fn(&DepthBuffer, &DepthRange, u32, &mut [T]) + Sync,
+        encoder: impl Fn(&DepthRange) -> E,
     ) -> Self {
         let maps = stats.stage("shadow_map", || render_light_maps(frame, res));
         let receivers = stats.stage("fit", || {
@@ -1376,8 +1374,9 @@ impl<T: Channel> FilteredMaps<T> {
                 .iter()
                 .zip(&ranges)
                 .map(|(m, r)| {
+                    let encode = encoder(r);
                     Texture::from_stored_rows(m.width, m.height, channels, |y, row| {
-                        encode(m, r, y, row)
+                        encode(m, y, row)
                     })
                 })
                 .collect()
@@ -1464,38 +1463,92 @@ fn lookup_n<T: Channel, const N: usize>(
         .for_each_init(
             || vec![0.0f32; ch],
             |buf, (c, (values, codes))| {
-                for (j, (value, code)) in values.iter_mut().zip(codes).enumerate() {
-                    let k = c * PIXEL_CHUNK + j;
-                    if !frame.receiver_lit(k) {
-                        if view.covered(k) {
-                            *value = Vec3::ZERO;
-                        }
-                        continue;
-                    }
-                    let p = view.position[k];
-                    let i = match *frame.light {
-                        Light::Point { position } => cube_face(p - position),
-                        _ => 0,
+                let chunk = LookupChunk {
+                    maps,
+                    frame,
+                    settings,
+                    first: c * PIXEL_CHUNK,
+                };
+                #[cfg(target_arch = "x86_64")]
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    // SAFETY: the processor has AVX2, checked just above.
+                    #[allow(unsafe_code)]
+                    unsafe {
+                        chunk.run_avx2::<N>(test, buf, values, codes)
                     };
-                    let lv = &maps.views[i];
-                    let s = lv.project(p);
-                    let fp = light_footprint(lv, p, view.dpdx[k], view.dpdy[k]);
-                    let lod = maps.chains[i].sample_n::<N>(
-                        s.u,
-                        s.v,
-                        &fp,
-                        settings.filter,
-                        settings.max_aniso,
-                        buf,
-                    );
-                    let d = maps.ranges[i].normalize(s.depth);
-                    let minified = u8::from(lod.lambda > 0.0);
-                    *value = Vec3::splat(test(d, &buf[..ch]));
-                    *code = lod.probes.clamp(1, 127) as u8 | minified << 7;
+                    return;
                 }
+                chunk.run::<N>(test, buf, values, codes);
             },
         );
     (values, codes)
+}
+
+/// One chunk of pixels of [`lookup_n`], starting at pixel `first`.
+struct LookupChunk<'a, 'f, T> {
+    maps: &'a FilteredMaps<T>,
+    frame: &'a Frame<'f>,
+    settings: &'a FilterSettings,
+    first: usize,
+}
+
+impl<T: Channel> LookupChunk<'_, '_, T> {
+    /// [`Self::run`] compiled for AVX2: twice the vector width for the same operations, so
+    /// the same results (no fused multiply-adds: those would round differently).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn run_avx2<const N: usize>(
+        &self,
+        test: &(impl Fn(f32, &[f32]) -> f32 + Sync),
+        buf: &mut [f32],
+        values: &mut [Vec3],
+        codes: &mut [u8],
+    ) {
+        self.run::<N>(test, buf, values, codes);
+    }
+
+    /// The look-ups of the chunk's pixels into `values` and `codes` (see [`lookup_n`]).
+    #[inline(always)]
+    fn run<const N: usize>(
+        &self,
+        test: &(impl Fn(f32, &[f32]) -> f32 + Sync),
+        buf: &mut [f32],
+        values: &mut [Vec3],
+        codes: &mut [u8],
+    ) {
+        let (maps, frame, settings) = (self.maps, self.frame, self.settings);
+        let view = frame.view;
+        let ch = buf.len();
+        for (j, (value, code)) in values.iter_mut().zip(codes).enumerate() {
+            let k = self.first + j;
+            if !frame.receiver_lit(k) {
+                if view.covered(k) {
+                    *value = Vec3::ZERO;
+                }
+                continue;
+            }
+            let p = view.position[k];
+            let i = match *frame.light {
+                Light::Point { position } => cube_face(p - position),
+                _ => 0,
+            };
+            let lv = &maps.views[i];
+            let s = lv.project(p);
+            let fp = light_footprint(lv, p, view.dpdx[k], view.dpdy[k]);
+            let lod = maps.chains[i].sample_n::<N>(
+                s.u,
+                s.v,
+                &fp,
+                settings.filter,
+                settings.max_aniso,
+                buf,
+            );
+            let d = maps.ranges[i].normalize(s.depth);
+            let minified = u8::from(lod.lambda > 0.0);
+            *value = Vec3::splat(test(d, &buf[..ch]));
+            *code = lod.probes.clamp(1, 127) as u8 | minified << 7;
+        }
+    }
 }
 
 #[cfg(test)]
