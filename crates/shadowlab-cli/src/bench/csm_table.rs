@@ -3,10 +3,13 @@
 //! 1024×768 on the minified `fence-far` scene (the paper used a 365k-face scene seen from
 //! far, Figure 10, with 16× anisotropic tri-linear filtering, which is `csm`'s default).
 //!
-//! A frame time is the technique's own time (`render`: light map, basis images, blur, mip
-//! chain, look-ups); the camera pass, shared by every technique, is excluded. The paper
-//! reports frames per second of a whole GPU frame; the comparable figure is the ratio to
-//! PCF, printed beside ours.
+//! Each cell gives the technique's own time (`render`: light map, basis images, blur, mip
+//! chain, look-ups) and its ratio to 3×3 PCF's, then the ratio of whole frames: the camera
+//! pass (rasterizing the scene from the eye at 1024×768, shared by every technique, timed
+//! alone) plus the technique, against the same for PCF. The paper reports frames per second
+//! of whole GPU frames, which include drawing the scene from the eye, so the whole-frame
+//! ratio is the one comparable to the paper's ratio, printed beside ours; the technique-only
+//! ratio is the stricter one.
 
 use super::{median_ms, BenchArgs, BenchReport};
 use anyhow::{Context, Result};
@@ -83,6 +86,8 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
         Ok(ms)
     };
 
+    // The camera pass, as every technique's frame includes it.
+    let (camera_ms, _) = median_ms(repeat.max(3), || ViewSamples::render(&scene, &camera));
     let mut pcf = Vec::new();
     for &s in sizes {
         pcf.push(time(
@@ -91,13 +96,15 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
         )?);
     }
     println!(
-        "csm-table: fence-far, 1024x768, {} covered pixels, {} threads; frame time in ms (ratio to 3x3 PCF) | paper fps (ratio)",
+        "csm-table: fence-far, 1024x768, {} covered pixels, {} threads, camera pass {:.1} ms",
         view.covered_count(),
-        rayon::current_num_threads()
+        rayon::current_num_threads(),
+        camera_ms
     );
+    println!("each cell: technique ms (ratio to 3x3 PCF) | whole-frame ratio | paper fps (ratio)");
     let header: String = sizes
         .iter()
-        .map(|s| format!(" | {:>29}", format!("S: {s}²")))
+        .map(|s| format!(" | {:>37}", format!("S: {s}²")))
         .collect();
     let mut rows = Vec::new();
     for &b in blurs {
@@ -109,7 +116,7 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
                 .map(|(&s, &p)| {
                     let col = SIZES.iter().position(|&x| x == s).unwrap_or(0);
                     format!(
-                        " | {:>8.1} ms (1.00) {:>3.0} fps (1.00)",
+                        " | {:>7.1} ms (1.00) | 1.00 | {:>3.0} fps (1.00)",
                         p, PAPER_PCF_FPS[col]
                     )
                 })
@@ -135,10 +142,12 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
                 let col = SIZES.iter().position(|&x| x == s).unwrap_or(0);
                 let fps = paper_fps(b, m, col);
                 let paper_ratio = PAPER_PCF_FPS[col] / fps;
+                let frame_ratio = (camera_ms + ms) / (camera_ms + p);
                 cells.push_str(&format!(
-                    " | {:>8.1} ms ({:.2}) {:>3.0} fps ({:.2})",
+                    " | {:>7.1} ms ({:.2}) | {:.2} | {:>3.0} fps ({:.2})",
                     ms,
                     ms / p,
+                    frame_ratio,
                     fps,
                     paper_ratio
                 ));
@@ -148,7 +157,9 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
                     "blur": blur_name(b),
                     "csm_ms": ms,
                     "pcf_ms": p,
+                    "camera_pass_ms": camera_ms,
                     "ratio_to_pcf": ms / p,
+                    "frame_ratio_to_pcf": frame_ratio,
                     "paper_csm_fps": fps,
                     "paper_pcf_fps": PAPER_PCF_FPS[col],
                     "paper_ratio_to_pcf": paper_ratio,
@@ -157,6 +168,6 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
             println!("M = {m:<2}{cells}");
         }
     }
-    println!("\nTarget: M = 4 without blur at most 1.3x a 3x3 PCF frame (the paper: 1.19 at 256²-1024², 1.38 at 2048²).");
+    println!("\nTarget: M = 4 without blur at most 1.3x a 3x3 PCF frame (the paper's whole frames: 1.19 at 256²-1024², 1.38 at 2048²).");
     Ok(BenchReport { rows })
 }
