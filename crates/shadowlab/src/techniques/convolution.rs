@@ -802,6 +802,30 @@ mod tests {
     }
 
     #[test]
+    fn every_instruction_set_variant_encodes_the_same_codes() {
+        let range = super::super::filtering::DepthRange {
+            near: -1.0,
+            far: 3.0,
+            span: 0.8,
+        };
+        let depths: Vec<f32> = (0..1000).map(|i| -1.3 + i as f32 * 0.0047).collect();
+        for m in [1u32, 4, 5, 16] {
+            let ch = 2 * m as usize;
+            let (mut dispatched, mut baseline) =
+                (vec![0u8; depths.len() * ch], vec![0u8; depths.len() * ch]);
+            let (mut dispatched_f, mut baseline_f) =
+                (vec![0f32; depths.len() * ch], vec![0f32; depths.len() * ch]);
+            encode_row_any_m(m, &range, &depths, &mut dispatched);
+            encode_row_any::<u8, 0>(m, &range, &depths, &mut baseline);
+            encode_row_any_m(m, &range, &depths, &mut dispatched_f);
+            encode_row_any::<f32, 0>(m, &range, &depths, &mut baseline_f);
+            assert_eq!(dispatched, baseline, "m {m}");
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&dispatched_f), bits(&baseline_f), "m {m}");
+        }
+    }
+
+    #[test]
     fn table_encoding_is_direct_encoding_within_one_code() {
         let range = super::super::filtering::DepthRange {
             near: 2.0,
