@@ -125,35 +125,39 @@ impl ViewSamples {
         let eye = camera.eye;
         let fwd = camera.forward();
         let rays = camera.rays();
-        let triangle = &vs.triangle;
-        let rows: Vec<_> = (0..h)
-            .into_par_iter()
-            .map(|y| {
-                (0..w)
-                    .map(|x| {
-                        let id = triangle[(y * w + x) as usize];
-                        (id != NO_TRIANGLE)
-                            .then(|| sample(scene, &rays, eye, fwd, id, x, y))
-                            .flatten()
-                    })
-                    .collect::<Vec<_>>()
-            })
-            .collect();
-        for (y, row) in rows.into_iter().enumerate() {
-            for (x, s) in row.into_iter().enumerate() {
-                let k = y * w as usize + x;
-                match s {
-                    Some(s) => {
-                        vs.position[k] = s.point.p;
-                        vs.position_error[k] = s.point.error;
-                        vs.normal[k] = s.normal;
-                        vs.depth[k] = s.depth;
-                        vs.dpdx[k] = s.dpdx;
-                        vs.dpdy[k] = s.dpdy;
-                    }
-                    None => vs.triangle[k] = NO_TRIANGLE,
-                }
-            }
+        let wu = w as usize;
+        if wu > 0 {
+            // Each row written in place by one task: no per-row intermediate, no serial copy.
+            vs.triangle
+                .par_chunks_mut(wu)
+                .zip(vs.position.par_chunks_mut(wu))
+                .zip(vs.position_error.par_chunks_mut(wu))
+                .zip(vs.normal.par_chunks_mut(wu))
+                .zip(vs.depth.par_chunks_mut(wu))
+                .zip(vs.dpdx.par_chunks_mut(wu))
+                .zip(vs.dpdy.par_chunks_mut(wu))
+                .enumerate()
+                .for_each(
+                    |(y, ((((((triangle, position), error), normal), depth), dpdx), dpdy))| {
+                        for x in 0..wu {
+                            let id = triangle[x];
+                            if id == NO_TRIANGLE {
+                                continue;
+                            }
+                            match sample(scene, &rays, eye, fwd, id, x as u32, y as u32) {
+                                Some(s) => {
+                                    position[x] = s.point.p;
+                                    error[x] = s.point.error;
+                                    normal[x] = s.normal;
+                                    depth[x] = s.depth;
+                                    dpdx[x] = s.dpdx;
+                                    dpdy[x] = s.dpdy;
+                                }
+                                None => triangle[x] = NO_TRIANGLE,
+                            }
+                        }
+                    },
+                );
         }
         vs.time_ms = t0.elapsed().as_secs_f64() * 1e3;
         vs
