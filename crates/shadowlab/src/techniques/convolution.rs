@@ -398,40 +398,36 @@ impl<T: Channel> BasisTable<T> {
 
     /// Encodes a row of map depths, normalized by `range`, into `row`.
     pub fn encode_row(&self, range: &super::filtering::DepthRange, depths: &[f32], row: &mut [T]) {
-        match self.channels {
-            2 => self.encode_row_n::<2>(range, depths, row),
-            4 => self.encode_row_n::<4>(range, depths, row),
-            6 => self.encode_row_n::<6>(range, depths, row),
-            8 => self.encode_row_n::<8>(range, depths, row),
-            16 => self.encode_row_n::<16>(range, depths, row),
-            32 => self.encode_row_n::<32>(range, depths, row),
-            _ => self.encode_row_n::<0>(range, depths, row),
-        }
+        super::filtering::with_channels!(
+            self.channels,
+            table_encode_row_n::<T>,
+            (self, range, depths, row)
+        )
     }
+}
 
-    /// [`Self::encode_row`] for `N` values per level known at compile time (0: read at run
-    /// time), so that a texel is one fixed-size copy.
-    #[inline(always)]
-    fn encode_row_n<const N: usize>(
-        &self,
-        range: &super::filtering::DepthRange,
-        depths: &[f32],
-        row: &mut [T],
-    ) {
-        let ch = if N > 0 { N } else { self.channels };
-        // Levels for a block first (arithmetic that vectorizes), then the copies.
-        let mut level = [0u32; ENCODE_BLOCK];
-        for (block, out) in depths
-            .chunks(ENCODE_BLOCK)
-            .zip(row.chunks_mut(ENCODE_BLOCK * ch))
-        {
-            for (l, &d) in level.iter_mut().zip(block) {
-                *l = self.level(range.normalize(d)) as u32;
-            }
-            for (texel, &j) in out.chunks_exact_mut(ch).zip(&level) {
-                let j = j as usize * ch;
-                texel.copy_from_slice(&self.codes[j..j + ch]);
-            }
+/// [`BasisTable::encode_row`] for `N` values per level known at compile time (0: read at run
+/// time), so that a texel is one fixed-size copy.
+#[inline(always)]
+fn table_encode_row_n<T: Channel, const N: usize>(
+    table: &BasisTable<T>,
+    range: &super::filtering::DepthRange,
+    depths: &[f32],
+    row: &mut [T],
+) {
+    let ch = if N > 0 { N } else { table.channels };
+    // Levels for a block first (arithmetic that vectorizes), then the copies.
+    let mut level = [0u32; ENCODE_BLOCK];
+    for (block, out) in depths
+        .chunks(ENCODE_BLOCK)
+        .zip(row.chunks_mut(ENCODE_BLOCK * ch))
+    {
+        for (l, &d) in level.iter_mut().zip(block) {
+            *l = table.level(range.normalize(d)) as u32;
+        }
+        for (texel, &j) in out.chunks_exact_mut(ch).zip(&level) {
+            let j = j as usize * ch;
+            texel.copy_from_slice(&table.codes[j..j + ch]);
         }
     }
 }

@@ -67,6 +67,7 @@ macro_rules! with_channels {
         }
     };
 }
+pub(crate) use with_channels;
 
 /// The channel count of a texture: the constant `N` when it is known at compile time.
 #[inline(always)]
