@@ -43,6 +43,16 @@ fn assert_bad_input(out: &Output, needle: &str) {
     );
 }
 
+/// The `metrics.json` of the report `compare` wrote into `dir`, after checking it succeeded.
+fn report_metrics(out: &Output, dir: &Path) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(&std::fs::read_to_string(dir.join("metrics.json")).unwrap()).unwrap()
+}
+
 fn render(dir: &Path, args: &[&str]) -> Output {
     bin()
         .arg("render")
@@ -276,14 +286,7 @@ fn compare_writes_metrics_and_refuses_foreign_folders() {
             .unwrap()
     };
     let out = run(&[]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let m: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out_dir.join("metrics.json")).unwrap())
-            .unwrap();
+    let m = report_metrics(&out, &out_dir);
     assert_eq!(m["width"], 96);
     let results = m["results"].as_array().unwrap();
     assert_eq!(results.len(), 3, "two sweep values of sm and one pcf");
@@ -355,14 +358,7 @@ fn layers_behind_semi_transparent_surfaces_are_shaded_and_measured() {
         .arg(&out_dir)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let m: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out_dir.join("metrics.json")).unwrap())
-            .unwrap();
+    let m = report_metrics(&out, &out_dir);
     assert!(m["layer_samples"].as_u64().unwrap() > 1000);
     let results = m["results"].as_array().unwrap();
     let afsm = results.iter().find(|r| r["technique"] == "afsm").unwrap();

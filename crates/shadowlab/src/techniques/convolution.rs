@@ -255,7 +255,7 @@ fn encode_row<T: Channel, const M: usize>(
         };
         return;
     }
-    encode_row_any::<T, M>(m, range, depths, row);
+    encode_row_body::<T, M>(m, range, depths, row);
 }
 
 /// [`encode_row`] compiled for AVX2: twice the vector width for the same operations, so the
@@ -268,12 +268,12 @@ fn encode_row_avx2<T: Channel, const M: usize>(
     depths: &[f32],
     row: &mut [T],
 ) {
-    encode_row_any::<T, M>(m, range, depths, row);
+    encode_row_body::<T, M>(m, range, depths, row);
 }
 
 /// The body of [`encode_row`], inlined into each instruction-set variant.
 #[inline(always)]
-fn encode_row_any<T: Channel, const M: usize>(
+fn encode_row_body<T: Channel, const M: usize>(
     m: u32,
     range: &super::filtering::DepthRange,
     depths: &[f32],
@@ -812,9 +812,9 @@ mod tests {
             let (mut dispatched_f, mut baseline_f) =
                 (vec![0f32; depths.len() * ch], vec![0f32; depths.len() * ch]);
             encode_row_any_m(m, &range, &depths, &mut dispatched);
-            encode_row_any::<u8, 0>(m, &range, &depths, &mut baseline);
+            encode_row_body::<u8, 0>(m, &range, &depths, &mut baseline);
             encode_row_any_m(m, &range, &depths, &mut dispatched_f);
-            encode_row_any::<f32, 0>(m, &range, &depths, &mut baseline_f);
+            encode_row_body::<f32, 0>(m, &range, &depths, &mut baseline_f);
             assert_eq!(dispatched, baseline, "m {m}");
             let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&dispatched_f), bits(&baseline_f), "m {m}");
