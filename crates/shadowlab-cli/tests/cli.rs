@@ -10,7 +10,7 @@ fn bin() -> Command {
 }
 
 fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data")).join(name)
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shadowlab/assets")).join(name)
 }
 
 fn tmp(name: &str) -> PathBuf {

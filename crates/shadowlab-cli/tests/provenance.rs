@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use std::process::Command;
 
 fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data")).join(name)
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shadowlab/assets")).join(name)
 }
 
 fn tmp(name: &str) -> PathBuf {

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shadowlab/assets");
 const SHADOWLAB: &str = env!("CARGO_BIN_EXE_shadowlab");
 /// Chromium gets this long to load the page and run the self-test before the test gives up.
 const BROWSER_TIMEOUT: Duration = Duration::from_secs(120);

@@ -26,7 +26,7 @@ const WIDTH: u32 = 1024;
 const HEIGHT: u32 = 768;
 
 fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data")).join(name)
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets")).join(name)
 }
 
 fn afsm(frame: &Frame, params: &[(&str, &str)]) -> Shadows {

@@ -12,7 +12,7 @@ use shadowlab::view::{ViewLayers, ViewSamples};
 use std::path::PathBuf;
 
 fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data")).join(name)
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets")).join(name)
 }
 
 fn bunny() -> (Scene, Camera, Light) {

@@ -27,7 +27,7 @@ const SMOKE_MISMATCH_LIMIT: f64 = 0.2;
 const POSITION_TOLERANCE: f32 = 1e-5;
 
 fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data")).join(name)
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets")).join(name)
 }
 
 /// A fresh scratch folder for one test.

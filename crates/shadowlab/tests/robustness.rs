@@ -40,7 +40,7 @@ const W: u32 = 160;
 const H: u32 = 120;
 
 fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data")).join(name)
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets")).join(name)
 }
 
 /// A technique with the settings used here: `asm` without its wall-clock time budget, so
