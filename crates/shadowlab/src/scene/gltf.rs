@@ -41,7 +41,9 @@
 use super::{Material, Scene};
 use crate::camera::{Camera, MAX_IMAGE_SIDE};
 use crate::error::{Error, Result};
+use crate::files::{read_prefix, Access, MAX_FILE_BYTES};
 use crate::light::Light;
+use crate::limits;
 use crate::math::{vec3, Aabb, Mat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::json::validation::Checked;
@@ -68,34 +70,45 @@ pub const CAMERA_DEFAULT_WIDTH: u32 = 1024;
 
 /// The most node visits of one hierarchy walk. A valid file visits each node once; a
 /// file that lists shared children many times over could otherwise multiply the walk.
-const MAX_NODE_VISITS: usize = 1 << 22;
+const MAX_NODE_VISITS: usize = 1 << 20;
 
-/// Loads a `.gltf` or `.glb` file.
+/// The most mesh instances one hierarchy walk may place: a few bytes of node graph can
+/// instance a mesh millions of times, each copy adding its triangles to the scene and to
+/// every technique's work.
+pub const MAX_MESH_INSTANCES: usize = 1 << 18;
+
+/// The most entries of each top-level array (`nodes`, `meshes`, `accessors`, …) a file
+/// may declare; counted before the document is decoded, so that a file listing ten
+/// million empty nodes is refused before they take gigabytes.
+pub const MAX_ELEMENTS: usize = 1 << 20;
+
+/// Loads a `.gltf` or `.glb` file; its buffer files must lie in its folder.
 pub fn load(path: &Path) -> Result<Scene> {
-    let bytes = std::fs::read(path).map_err(|e| Error::Io {
-        path: path.into(),
-        source: e,
-    })?;
+    load_with(path, &Access::for_scene(path, false))
+}
+
+/// Loads a `.gltf` or `.glb` file whose buffer URIs resolve as `access` allows.
+pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
+    let bytes = super::read_input(path, MAX_FILE_BYTES)?;
     let fmt = |what: String| Error::format(path, what);
-    // The GLB reader subtracts the header size from the declared length unchecked.
-    if bytes.starts_with(b"glTF") {
-        let declared = bytes
-            .get(8..12)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
-        match declared {
-            Some(n) if n >= 20 => {}
-            _ => {
-                return Err(fmt(
-                    "the GLB header is truncated or declares an impossible length".into(),
-                ))
-            }
-        }
-    }
+    let json = if bytes.starts_with(b"glTF") {
+        glb_json(&bytes).map_err(fmt)?
+    } else {
+        &bytes[..]
+    };
+    check_counts(json).map_err(fmt)?;
     let gltf = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| fmt(describe(e)))?;
     validate(gltf.document.as_json()).map_err(|e| fmt(describe(e)))?;
+    let version = &gltf.document.as_json().asset.version;
+    if !version.starts_with("2.") {
+        return Err(fmt(format!(
+            "asset.version {:?} is not a glTF 2.x version",
+            version.chars().take(16).collect::<String>()
+        )));
+    }
     let gltf::Gltf { document, blob } = gltf;
     let base = path.parent().unwrap_or(Path::new("."));
-    let buffers = load_buffers(path, base, &document, blob)?;
+    let buffers = load_buffers(path, base, access, &document, blob)?;
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -111,7 +124,9 @@ pub fn load(path: &Path) -> Result<Scene> {
         camera: None,
         light: None,
     };
-    loader.walk()?;
+    let planned = loader.walk(true)?;
+    super::check_triangle_count(path, planned)?;
+    loader.walk(false)?;
     let Loader {
         mut scene,
         camera,
@@ -161,8 +176,10 @@ impl Loader<'_> {
         Error::format(self.path, what)
     }
 
-    /// Walks the scene's hierarchy depth-first, in file order, adding each mesh instance.
-    fn walk(&mut self) -> Result<()> {
+    /// Walks the scene's hierarchy depth-first, in file order, adding each mesh instance;
+    /// with `plan`, only counts the triangles the instances would add (from the
+    /// accessors' counts, nothing decoded) and returns the total.
+    fn walk(&mut self, plan: bool) -> Result<u64> {
         let doc = self.doc;
         let roots: Vec<gltf::Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
             Some(s) => s.nodes().collect(),
@@ -183,6 +200,8 @@ impl Loader<'_> {
             .map(|n| (n, Mat4::IDENTITY, 0))
             .collect();
         let mut visits = 0usize;
+        let mut instances = 0usize;
+        let mut planned = 0u64;
         while let Some((node, parent, depth)) = stack.pop() {
             visits += 1;
             if depth > node_count {
@@ -193,7 +212,7 @@ impl Loader<'_> {
             }
             if visits > MAX_NODE_VISITS {
                 return Err(Error::Limit(format!(
-                    "{}: the node hierarchy needs more than {MAX_NODE_VISITS} node visits",
+                    "{}: the node hierarchy needs more node visits than the limit of {MAX_NODE_VISITS}",
                     self.path.display()
                 )));
             }
@@ -213,17 +232,23 @@ impl Loader<'_> {
                 }
             }
             if let Some(mesh) = node.mesh() {
-                let prims = self.mesh(&mesh)?;
-                for p in prims.iter() {
-                    if self.scene.len() + p.tris.len() > super::MAX_TRIANGLES {
-                        return Err(Error::Limit(format!(
-                            "{} holds more than {} triangles with its instances",
-                            self.path.display(),
-                            super::MAX_TRIANGLES
-                        )));
+                instances += 1;
+                if instances > MAX_MESH_INSTANCES {
+                    return Err(Error::Limit(format!(
+                        "{}: the node hierarchy places more mesh instances than the limit of {MAX_MESH_INSTANCES}",
+                        self.path.display()
+                    )));
+                }
+                if plan {
+                    planned = planned.saturating_add(mesh_triangles(&mesh));
+                } else {
+                    let prims = self.mesh(&mesh)?;
+                    let added: usize = prims.iter().map(|p| p.tris.len()).sum();
+                    super::check_triangle_count(self.path, (self.scene.len() + added) as u64)?;
+                    for p in prims.iter() {
+                        self.scene
+                            .push_indexed(&p.positions, &p.tris, world, p.material);
                     }
-                    self.scene
-                        .push_indexed(&p.positions, &p.tris, world, p.material);
                 }
             }
             let children: Vec<gltf::Node> = node.children().collect();
@@ -231,7 +256,7 @@ impl Loader<'_> {
                 stack.push((c, world, depth + 1));
             }
         }
-        Ok(())
+        Ok(planned)
     }
 
     /// The decoded primitives of `mesh`, decoding them on first use.
@@ -267,10 +292,7 @@ impl Loader<'_> {
             for (v, c) in raw.chunks_exact(3).enumerate() {
                 let p = vec3(c[0] as f32, c[1] as f32, c[2] as f32);
                 if !p.is_finite() {
-                    return Err(self.err(format!(
-                        "{at}: vertex {v} has a non-finite position ({}, {}, {})",
-                        c[0], c[1], c[2]
-                    )));
+                    return Err(self.err(format!("{at}: vertex {v} has a non-finite position")));
                 }
                 positions.push(p);
             }
@@ -293,7 +315,7 @@ impl Loader<'_> {
                     for (k, &i) in raw.iter().enumerate() {
                         if i >= n as f64 {
                             return Err(self.err(format!(
-                                "{at}: index {k} (accessor {}) is {i}, out of range for the {n} vertices of POSITION",
+                                "{at}: index {k} (accessor {}) is out of range for the {n} vertices of POSITION",
                                 acc.index()
                             )));
                         }
@@ -383,6 +405,11 @@ impl Loader<'_> {
                     self.path.display()
                 ))
             })?;
+        // What the decoded accessor and the scene's copy of it take, checked first.
+        limits::check_bytes(
+            || format!("{}: {what}: its {count} elements", self.path.display()),
+            (total as u64).saturating_mul(8 + 4 + super::BYTES_PER_TRIANGLE / 3),
+        )?;
         // The data is checked to be there before anything is allocated.
         let dense = match acc.view() {
             Some(view) => {
@@ -414,7 +441,7 @@ impl Loader<'_> {
             // No buffer view: zeros, to be replaced by sparse entries.
             None => None,
         };
-        let mut out = vec![0.0f64; total];
+        let mut out = limits::try_filled(total, 0.0f64, &what)?;
         if let Some((data, stride)) = dense {
             for i in 0..count {
                 let start = acc.offset() + i * stride;
@@ -489,6 +516,23 @@ impl Loader<'_> {
             ))),
         }
     }
+}
+
+/// The triangles `mesh` adds per instance, from its accessors' counts alone.
+fn mesh_triangles(mesh: &gltf::Mesh) -> u64 {
+    let mut n = 0u64;
+    for prim in mesh.primitives() {
+        let Some(pos) = prim.get(&gltf::Semantic::Positions) else {
+            continue;
+        };
+        let k = prim.indices().map_or(pos.count(), |a| a.count()) as u64;
+        n = n.saturating_add(match prim.mode() {
+            Mode::Triangles => k / 3,
+            Mode::TriangleStrip | Mode::TriangleFan => k.saturating_sub(2),
+            _ => 0,
+        });
+    }
+    n
 }
 
 /// Decodes one element's components from little-endian bytes; normalized integers map to
@@ -573,6 +617,7 @@ fn assemble(mode: Mode, idx: &[u32]) -> Option<Vec<[u32; 3]>> {
 fn load_buffers(
     path: &Path,
     base: &Path,
+    access: &Access,
     doc: &gltf::Document,
     mut blob: Option<Vec<u8>>,
 ) -> Result<Vec<Vec<u8>>> {
@@ -597,15 +642,18 @@ fn load_buffers(
                 (data.0, "its data: URI".to_string())
             }
             gltf::buffer::Source::Uri(uri) => {
-                let file = resolve_uri(base, uri)
-                    .map_err(|why| fmt(format!("buffer {i} ({uri:?}): {why}")))?;
-                let data = std::fs::read(&file).map_err(|e| {
+                let shown: String = uri.chars().take(120).collect();
+                let file = resolve_uri(base, access, uri)
+                    .map_err(|why| fmt(format!("buffer {i} ({shown:?}) {why}")))?;
+                // Never more than the declared length: the rest of the file is not the
+                // buffer's.
+                let data = read_prefix(&file, buffer.length() as u64).map_err(|why| {
                     fmt(format!(
-                        "buffer {i} refers to the file {uri:?} ({}), which cannot be read: {e}",
+                        "buffer {i} refers to the file {shown:?} ({}), which {why}",
                         file.display()
                     ))
                 })?;
-                (data, format!("the file {uri:?}"))
+                (data, format!("the file {shown:?}"))
             }
         };
         if data.len() < buffer.length() {
@@ -621,20 +669,141 @@ fn load_buffers(
 }
 
 /// The file a non-`data:` buffer URI names: a relative, percent-encoded reference
-/// resolved against the glTF file's folder, or a `file:` URI.
-fn resolve_uri(base: &Path, uri: &str) -> std::result::Result<PathBuf, String> {
-    if let Some(rest) = uri
+/// resolved against the glTF file's folder, or a `file:` URI, decoded first and then
+/// kept where `access` allows. `Err` is a phrase following the URI.
+fn resolve_uri(base: &Path, access: &Access, uri: &str) -> std::result::Result<PathBuf, String> {
+    let decoded = if let Some(rest) = uri
         .strip_prefix("file://")
         .or_else(|| uri.strip_prefix("file:"))
     {
-        return Ok(PathBuf::from(percent_decode(rest)?));
-    }
-    if uri.contains(':') {
+        percent_decode(rest)?
+    } else if uri.contains(':') {
         return Err(
-            "the URI scheme is not supported (only relative paths, file: and data: are)".into(),
+            "uses a URI scheme that is not supported (only relative paths, file: and data: are)"
+                .into(),
         );
+    } else {
+        percent_decode(uri)?
+    };
+    access.resolve(base, &decoded)
+}
+
+/// The JSON chunk of a GLB file, after checking that the header's length is the file's
+/// and that every chunk lies inside it.
+fn glb_json(bytes: &[u8]) -> std::result::Result<&[u8], String> {
+    let word = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as u64)
+    };
+    let (Some(version), Some(declared)) = (word(4), word(8)) else {
+        return Err("the GLB header is truncated".into());
+    };
+    if version != 2 {
+        return Err(format!(
+            "the GLB header declares container version {version}, not 2"
+        ));
     }
-    Ok(base.join(percent_decode(uri)?))
+    if declared != bytes.len() as u64 {
+        return Err(format!(
+            "the GLB header declares {declared} bytes but the file holds {}",
+            bytes.len()
+        ));
+    }
+    let mut at = 12u64;
+    let mut json = None;
+    let mut chunk = 0;
+    while at < declared {
+        let (Some(len), Some(kind)) = (word(at as usize), word(at as usize + 4)) else {
+            return Err(format!("GLB chunk {chunk}: its header is truncated"));
+        };
+        let end = at + 8 + len;
+        if end > declared {
+            return Err(format!(
+                "GLB chunk {chunk} declares {len} bytes, past the end of the file"
+            ));
+        }
+        if chunk == 0 {
+            if kind != 0x4E4F_534A {
+                return Err("the first GLB chunk is not JSON".into());
+            }
+            json = Some(&bytes[at as usize + 8..end as usize]);
+        }
+        at = end;
+        chunk += 1;
+    }
+    json.ok_or_else(|| "the GLB file has no JSON chunk".into())
+}
+
+/// Fails when a top-level array of the document has more than [`MAX_ELEMENTS`] entries,
+/// counted without decoding them.
+fn check_counts(json: &[u8]) -> std::result::Result<(), String> {
+    use serde::de::{IgnoredAny, SeqAccess, Visitor};
+    /// The length of a JSON array whose elements are skipped.
+    #[derive(Default)]
+    struct Count(usize);
+    impl<'de> serde::Deserialize<'de> for Count {
+        fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+            struct V;
+            impl<'de> Visitor<'de> for V {
+                type Value = Count;
+                fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                    f.write_str("an array")
+                }
+                fn visit_seq<A: SeqAccess<'de>>(
+                    self,
+                    mut seq: A,
+                ) -> std::result::Result<Count, A::Error> {
+                    let mut n = 0;
+                    while seq.next_element::<IgnoredAny>()?.is_some() {
+                        n += 1;
+                    }
+                    Ok(Count(n))
+                }
+            }
+            d.deserialize_any(V)
+        }
+    }
+    #[derive(serde::Deserialize)]
+    struct Top {
+        #[serde(default)]
+        nodes: Count,
+        #[serde(default)]
+        meshes: Count,
+        #[serde(default)]
+        accessors: Count,
+        #[serde(default, rename = "bufferViews")]
+        buffer_views: Count,
+        #[serde(default)]
+        buffers: Count,
+        #[serde(default)]
+        materials: Count,
+        #[serde(default)]
+        scenes: Count,
+        #[serde(default)]
+        cameras: Count,
+    }
+    // A document that does not parse is left to the glTF crate, which says why.
+    let Ok(top) = serde_json::from_slice::<Top>(json) else {
+        return Ok(());
+    };
+    for (name, n) in [
+        ("nodes", top.nodes.0),
+        ("meshes", top.meshes.0),
+        ("accessors", top.accessors.0),
+        ("bufferViews", top.buffer_views.0),
+        ("buffers", top.buffers.0),
+        ("materials", top.materials.0),
+        ("scenes", top.scenes.0),
+        ("cameras", top.cameras.0),
+    ] {
+        if n > MAX_ELEMENTS {
+            return Err(format!(
+                "it declares {n} {name}, more than the limit of {MAX_ELEMENTS}"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Decodes `%XX` escapes; a `%` not followed by two hex digits stays as it is.
@@ -852,12 +1021,26 @@ fn convert_light(path: &Path, doc: &gltf::Document, index: usize, world: Mat4) -
         gltf::khr_lights_punctual::Kind::Directional => Light::Directional { to_light: -dir },
         gltf::khr_lights_punctual::Kind::Point => Light::Point { position },
         gltf::khr_lights_punctual::Kind::Spot {
-            outer_cone_angle, ..
-        } => Light::Spot {
-            position,
-            target: position + dir,
-            fov_deg: (2.0 * outer_cone_angle).to_degrees().min(MAX_SPOT_FOV_DEG),
-        },
+            outer_cone_angle,
+            inner_cone_angle,
+        } => {
+            let half_pi = std::f32::consts::FRAC_PI_2;
+            if !(outer_cone_angle > 0.0 && outer_cone_angle <= half_pi) {
+                return Err(fmt(format!(
+                    "light {index}: outerConeAngle {outer_cone_angle} rad is outside (0, π/2]"
+                )));
+            }
+            if !(inner_cone_angle >= 0.0 && inner_cone_angle < outer_cone_angle) {
+                return Err(fmt(format!(
+                    "light {index}: innerConeAngle {inner_cone_angle} rad is outside [0, outerConeAngle)"
+                )));
+            }
+            Light::Spot {
+                position,
+                target: position + dir,
+                fov_deg: (2.0 * outer_cone_angle).to_degrees().min(MAX_SPOT_FOV_DEG),
+            }
+        }
     };
     if matches!(out, Light::Directional { .. } | Light::Spot { .. }) && dir == Vec3::ZERO {
         return Err(fmt(format!(

@@ -6,7 +6,9 @@
 
 use super::{Material, Scene};
 use crate::error::{Error, Result};
+use crate::files::{read_regular_file, Access, MAX_FILE_BYTES, MAX_SCENE_TEXT_BYTES};
 use crate::math::{vec3, Mat4, Vec3};
+use std::cell::RefCell;
 use std::path::Path;
 
 const LOAD_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
@@ -16,16 +18,40 @@ const LOAD_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
     ignore_lines: true,
 };
 
-/// Loads an OBJ file.
+/// Loads an OBJ file; its `mtllib` files must lie in its folder.
 pub fn load(path: &Path) -> Result<Scene> {
-    check_faces(path)?;
-    let (models, mats) = tobj::load_obj(path, &LOAD_OPTIONS).map_err(|e| match e {
-        tobj::LoadError::OpenFileFailed => Error::Io {
-            path: path.into(),
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, "the file cannot be opened"),
-        },
-        other => Error::format(path, format!("not a valid OBJ file ({other})")),
-    })?;
+    load_with(path, &Access::for_scene(path, false))
+}
+
+/// Loads an OBJ file whose `mtllib` files resolve as `access` allows. Material libraries
+/// that do not exist are not errors (the mesh gets the default material); one that is
+/// not a regular file, or lies outside where `access` allows, is.
+pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
+    let bytes = super::read_input(path, MAX_FILE_BYTES)?;
+    let triangles = check_lines(path, &bytes)?;
+    super::check_triangle_count(path, triangles)?;
+    let base = path.parent().unwrap_or(Path::new(""));
+    let refused: RefCell<Option<String>> = RefCell::new(None);
+    let loader = |mtl: &Path| {
+        let name = mtl.to_string_lossy();
+        let read = access
+            .resolve(base, &name)
+            .and_then(|full| read_regular_file(&full, MAX_SCENE_TEXT_BYTES));
+        match read {
+            Ok(text) => tobj::load_mtl_buf(&mut text.as_slice()),
+            Err(why) => {
+                if why != "does not exist" && refused.borrow().is_none() {
+                    *refused.borrow_mut() = Some(format!("its material library {name:?} {why}"));
+                }
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    };
+    let (models, mats) = tobj::load_obj_buf(&mut bytes.as_slice(), &LOAD_OPTIONS, loader)
+        .map_err(|e| Error::format(path, format!("not a valid OBJ file ({e})")))?;
+    if let Some(why) = refused.into_inner() {
+        return Err(Error::format(path, why));
+    }
     build(path, &models, mats)
 }
 
@@ -100,31 +126,75 @@ fn build(
     Ok(scene)
 }
 
-/// Fails on a face line with fewer than three vertices, which `tobj` drops without a
-/// word: it is what a file cut short in its face list ends with.
-fn check_faces(path: &Path) -> Result<()> {
-    let bytes = std::fs::read(path).map_err(|e| Error::Io {
-        path: path.into(),
-        source: e,
-    })?;
+/// Checks the lines `tobj` would reject or silently drop, so the error can name the
+/// line: a face with fewer than three vertices (what a file cut short ends with), a
+/// vertex whose coordinates are not numbers or not finite, a face index that is not a
+/// number or names a vertex not defined before it. Returns the number of triangles the
+/// faces make, to be checked before any is built.
+fn check_lines(path: &Path, bytes: &[u8]) -> Result<u64> {
+    let mut vertices: u64 = 0;
+    let mut triangles: u64 = 0;
     for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let at = |what: String| Error::format(path, format!("line {}: {what}", n + 1));
         let mut tokens = line
             .split(|b| b.is_ascii_whitespace())
             .filter(|t| !t.is_empty());
-        if tokens.next() == Some(b"f".as_slice()) {
-            let k = tokens.count();
-            if k < 3 {
-                return Err(Error::format(
-                    path,
-                    format!(
-                        "line {}: a face with {k} vertices, fewer than 3 (is the file truncated?)",
-                        n + 1
-                    ),
-                ));
+        match tokens.next() {
+            Some(b"v") => {
+                vertices += 1;
+                for (axis, t) in tokens.take(3).enumerate() {
+                    let v = std::str::from_utf8(t)
+                        .ok()
+                        .and_then(|t| t.parse::<f32>().ok());
+                    match v {
+                        Some(v) if v.is_finite() => {}
+                        Some(_) => {
+                            return Err(at(format!(
+                                "vertex {vertices} has a non-finite coordinate {}",
+                                ["x", "y", "z"][axis]
+                            )))
+                        }
+                        None => {
+                            return Err(at(format!(
+                                "vertex {vertices}: coordinate {} is not a number",
+                                ["x", "y", "z"][axis]
+                            )))
+                        }
+                    }
+                }
             }
+            Some(b"f") => {
+                let mut k = 0u64;
+                for t in tokens {
+                    k += 1;
+                    let first = t.split(|&b| b == b'/').next().unwrap_or_default();
+                    let i = std::str::from_utf8(first)
+                        .ok()
+                        .and_then(|s| s.parse::<i64>().ok());
+                    let ok = match i {
+                        Some(i) if i > 0 => i as u64 <= vertices,
+                        Some(i) if i < 0 => i.unsigned_abs() <= vertices,
+                        _ => false,
+                    };
+                    if !ok {
+                        let shown = String::from_utf8_lossy(first);
+                        let shown: String = shown.chars().take(24).collect();
+                        return Err(at(format!(
+                            "face vertex {k} ({shown:?}) does not name one of the {vertices} vertices defined before it"
+                        )));
+                    }
+                }
+                if k < 3 {
+                    return Err(at(format!(
+                        "a face with {k} vertices, fewer than 3 (is the file truncated?)"
+                    )));
+                }
+                triangles += k - 2;
+            }
+            _ => {}
         }
     }
-    Ok(())
+    Ok(triangles)
 }
 
 fn convert(m: &tobj::Material) -> Material {
