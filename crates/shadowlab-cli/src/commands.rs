@@ -1,6 +1,7 @@
 //! `render`, `compare` and `scenes`.
 
 use crate::config::{parse_kvs, parse_prefixed_params, SceneArgs, Setup};
+use crate::outputs::{self, Planned};
 use crate::{progress, report};
 use anyhow::{bail, Context, Result};
 use serde_json::{json, Value};
@@ -137,16 +138,51 @@ fn stats_json(s: &Shadows, time_ms: f64) -> serde_json::Map<String, Value> {
     m
 }
 
-/// Refuses to overwrite a file the user did not ask to overwrite.
-fn check_new_file(path: &Path, force: bool, flag: &str) -> Result<()> {
-    if path.exists() && !force {
-        return Err(BadInput(format!(
-            "{flag} {} already exists; pass --force to overwrite it",
-            path.display()
-        ))
-        .into());
+/// The most values one `--sweep` may list.
+pub const MAX_SWEEP_VALUES: usize = 64;
+
+/// The most runs one `compare` may plan (techniques times sweep values): each keeps its
+/// result for the report until the end.
+pub const MAX_RUNS: usize = 128;
+
+/// The file of frame `i` of a sequence written beside `output`.
+fn frame_file(output: &Path, i: usize) -> PathBuf {
+    let stem = output.with_extension("");
+    PathBuf::from(format!("{}-{i:04}.png", stem.display()))
+}
+
+/// Every file `render` will write, checked before any work.
+fn check_render_outputs(a: &RenderArgs) -> Result<()> {
+    let mut planned = vec![Planned::new(&a.output, "--output", &["png"])];
+    if a.scene.frames > 1 && a.scene.frames <= crate::config::MAX_FRAMES {
+        for i in 0..a.scene.frames {
+            planned.push(Planned::new(
+                &frame_file(&a.output, i),
+                format!("--output (frame {i})"),
+                &[],
+            ));
+        }
+        planned.push(Planned::new(
+            &a.output.with_extension("gif"),
+            "--output (animation)",
+            &[],
+        ));
     }
-    Ok(())
+    if let Some(p) = &a.visibility {
+        planned.push(Planned::new(p, "--visibility", &["exr"]));
+    }
+    if let Some(p) = &a.stats {
+        planned.push(Planned::new(p, "--stats", &["json"]));
+    }
+    if let Some(p) = &a.export_scene {
+        planned.push(Planned::new(p, "--export-scene", &["obj"]));
+        planned.push(Planned::new(
+            &p.with_extension("mtl"),
+            "--export-scene (materials)",
+            &[],
+        ));
+    }
+    outputs::check(&planned, a.force)
 }
 
 /// Makes a technique with `params` applied.
@@ -170,8 +206,10 @@ pub struct Run {
 /// Renders frame `i`: the camera pass, shared by all techniques.
 pub fn camera_pass(setup: &Setup, i: usize) -> Result<(Camera, ViewSamples)> {
     let camera = setup.camera_at(i);
-    camera.validate()?;
-    let view = ViewSamples::render(&setup.scene, &camera);
+    camera
+        .validate()
+        .with_context(|| format!("frame {i} of the camera path of {}", setup.scene.name))?;
+    let view = ViewSamples::try_render(&setup.scene, &camera)?;
     Ok((camera, view))
 }
 
@@ -229,21 +267,13 @@ fn run_frame(run: &mut Run, frame: &Frame) -> Result<()> {
 
 /// `shadowlab render`.
 pub fn render(a: &RenderArgs) -> Result<()> {
-    for (p, flag) in [
-        (Some(&a.output), "--output"),
-        (a.visibility.as_ref(), "--visibility"),
-        (a.stats.as_ref(), "--stats"),
-        (a.export_scene.as_ref(), "--export-scene"),
-    ] {
-        if let Some(p) = p {
-            check_new_file(p, a.force, flag)?;
-        }
-    }
+    check_render_outputs(a)?;
     let params = parse_kvs(&a.params, "--param")?;
     let params: Vec<(String, String)> = params.into_iter().collect();
     let technique = make_technique(&a.technique, &params)?;
     let pb = progress::step(format!("loading {}", a.scene.scene));
     let setup = a.scene.resolve()?;
+    setup.check_pixel_budget(1)?;
     pb.finish_and_clear();
     let mut run = Run {
         label: a.technique.clone(),
@@ -262,7 +292,6 @@ pub fn render(a: &RenderArgs) -> Result<()> {
     let mut animation = None;
     if a.scene.frames > 1 {
         let gif = a.output.with_extension("gif");
-        check_new_file(&gif, a.force, "--output animation")?;
         animation = Some(report::Animation::create(&gif)?);
     }
     for i in 0..setup.frames {
@@ -279,8 +308,7 @@ pub fn render(a: &RenderArgs) -> Result<()> {
         if a.scene.frames > 1 {
             let s = &run.last.as_ref().unwrap().0;
             let img = shade_shadows(&setup, &view, layers.as_ref(), s);
-            let stem = a.output.with_extension("");
-            shade::save_png(&img, Path::new(&format!("{}-{i:04}.png", stem.display())))?;
+            shade::save_png(&img, &frame_file(&a.output, i))?;
             if let Some(anim) = animation.as_mut() {
                 anim.push(&img)?;
             }
@@ -391,6 +419,12 @@ fn plan_runs(a: &CompareArgs) -> Result<Vec<PlannedRun>> {
         if vals.is_empty() {
             bail!("--sweep {s:?} lists no values");
         }
+        if vals.len() > MAX_SWEEP_VALUES {
+            bail!(
+                "--sweep {tk} lists {} values, more than the limit of {MAX_SWEEP_VALUES}",
+                vals.len()
+            );
+        }
         sweeps.push((t.trim().to_string(), k.trim().to_string(), vals));
     }
     let mut runs = Vec::new();
@@ -417,32 +451,19 @@ fn plan_runs(a: &CompareArgs) -> Result<Vec<PlannedRun>> {
             );
         }
     }
-    Ok(runs)
-}
-
-/// Checks the report folder: it may be new, empty, or an earlier report; anything else
-/// needs `--force`.
-fn prepare_out(dir: &Path, force: bool) -> Result<()> {
-    if dir.exists() {
-        if !dir.is_dir() {
-            return Err(BadInput(format!(
-                "--out {} exists and is not a folder",
-                dir.display()
-            ))
-            .into());
-        }
-        let non_empty = std::fs::read_dir(dir)?.next().is_some();
-        let is_report = dir.join("metrics.json").is_file();
-        if non_empty && !is_report && !force {
-            return Err(BadInput(format!(
-                "--out {} is a non-empty folder that is not a shadowlab report; pass --force to write into it",
-                dir.display()
-            ))
-            .into());
+    if runs.len() > MAX_RUNS {
+        bail!(
+            "--techniques and --sweep plan {} runs, more than the limit of {MAX_RUNS}",
+            runs.len()
+        );
+    }
+    let mut files = std::collections::BTreeMap::new();
+    for (_, label, _) in &runs {
+        if let Some(other) = files.insert(slug(label), label) {
+            bail!("runs {other} and {label} would write the same report files; give them distinct values");
         }
     }
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    Ok(())
+    Ok(runs)
 }
 
 /// File-name-safe form of a run label.
@@ -472,10 +493,12 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             frames: Vec::new(),
         });
     }
-    prepare_out(&a.out, a.force)?;
+    outputs::check_report_dir(&a.out, a.force)?;
     let pb = progress::step(format!("loading {}", a.scene.scene));
     let setup = a.scene.resolve()?;
+    setup.check_pixel_budget(runs.len() + 1)?;
     pb.finish_and_clear();
+    outputs::create_report_dir(&a.out)?;
     let dump = a.dump.then(|| a.out.join("dump"));
     if let Some(d) = &dump {
         std::fs::create_dir_all(d)?;

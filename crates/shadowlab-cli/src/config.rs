@@ -45,6 +45,10 @@ pub struct SceneArgs {
     /// surface only).
     #[arg(long)]
     pub layers: bool,
+    /// Let a scene file's references (glTF buffer URIs, OBJ `mtllib`, TOML mesh `file`)
+    /// name files outside its folder; by default they are refused.
+    #[arg(long = "allow-outside-scene-dir")]
+    pub allow_outside_scene_dir: bool,
 }
 
 /// A loaded scene with its resolved camera (first frame), light and path.
@@ -58,7 +62,35 @@ pub struct Setup {
 /// The most frames a sequence may have.
 pub const MAX_FRAMES: usize = 100_000;
 
+/// Bytes a frame holds per pixel whatever the techniques: the camera pass's samples (68),
+/// the rasterizer's depth and id tiles while they are assembled (16), the shaded images
+/// and the animation frame (about 12), and the technique's per-pixel working set (afsm's
+/// samples and lists, the largest, about 32).
+pub const BYTES_PER_PIXEL: u64 = 128;
+
+/// Bytes each result kept until the end of a run holds per pixel: its visibility (16),
+/// with the error image and the comparison's working set in `compare` (16).
+pub const RESULT_BYTES_PER_PIXEL: u64 = 32;
+
 impl Setup {
+    /// Refuses an image whose camera pass and `results` kept results (a render keeps one;
+    /// compare one per run and the reference's) would need more memory than this process
+    /// may use, naming the size and the estimate, before anything is rendered.
+    pub fn check_pixel_budget(&self, results: usize) -> Result<()> {
+        let (w, h) = (self.camera.width, self.camera.height);
+        let pixels = w as u64 * h as u64;
+        let per = BYTES_PER_PIXEL + RESULT_BYTES_PER_PIXEL * results as u64;
+        shadowlab::limits::check_bytes(
+            || {
+                format!(
+                    "a {w}x{h} image (--width/--height) with {results} result(s) kept: {pixels} pixels"
+                )
+            },
+            pixels.saturating_mul(per),
+        )?;
+        Ok(())
+    }
+
     /// The camera of frame `i` (the scene's path when it has one, else the still camera),
     /// with its depth range fitted to the scene.
     pub fn camera_at(&self, i: usize) -> Camera {
@@ -129,7 +161,10 @@ impl SceneArgs {
             bail!("--frames {} is outside 1..={MAX_FRAMES}", self.frames);
         }
         let params = parse_kvs(&self.scene_params, "--scene-param")?;
-        let scene = scene::load(&self.scene, &params)?;
+        let options = scene::LoadOptions {
+            allow_outside_scene_dir: self.allow_outside_scene_dir,
+        };
+        let scene = scene::load_with(&self.scene, &params, &options)?;
         let mut camera = scene.camera.unwrap_or_else(|| {
             let mut s = scene.clone();
             s.auto_frame(false);
@@ -179,10 +214,28 @@ impl SceneArgs {
                 to_light: vec3(-0.4, 1.0, 0.3).normalize(),
             }),
         };
-        light.validate()?;
+        light
+            .validate()
+            .with_context(|| format!("the light of {}", self.scene))?;
         let mut check = camera;
         check.fit_depth_range(&scene.bounds);
-        check.validate()?;
+        check.validate().with_context(|| {
+            let mut from = Vec::new();
+            if let Some(c) = &self.camera {
+                from.push(format!("--camera {c}"));
+            }
+            if let Some(f) = self.camera_distance {
+                from.push(format!("--camera-distance {f}"));
+            }
+            if self.width.is_some() || self.height.is_some() {
+                from.push("--width/--height".to_string());
+            }
+            if from.is_empty() {
+                format!("the camera of {}", self.scene)
+            } else {
+                format!("the camera of {} with {}", self.scene, from.join(" and "))
+            }
+        })?;
         Ok(Setup {
             scene,
             camera,
