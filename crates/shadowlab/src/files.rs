@@ -13,7 +13,7 @@
 use crate::limits;
 use std::io::Read;
 use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 /// The largest file a mesh loader or a glTF buffer reads (4 GiB): more than any scene
 /// that fits in memory with its acceleration structure.
@@ -168,7 +168,25 @@ impl Access {
         match std::fs::canonicalize(&full) {
             Ok(c) if c.starts_with(root) => Ok(full),
             Ok(_) => Err(outside()),
-            Err(e) => Err(io_reason(&e)),
+            // A missing file is outside when its path, taken literally, leaves the folder.
+            Err(e) => {
+                let base = std::fs::canonicalize(base).unwrap_or_else(|_| base.to_path_buf());
+                let mut lexical = PathBuf::new();
+                for c in base.join(reference).components() {
+                    match c {
+                        Component::ParentDir => {
+                            lexical.pop();
+                        }
+                        Component::CurDir => {}
+                        other => lexical.push(other),
+                    }
+                }
+                if lexical.starts_with(root) {
+                    Err(io_reason(&e))
+                } else {
+                    Err(outside())
+                }
+            }
         }
     }
 }
