@@ -342,6 +342,7 @@ pub fn render(a: &RenderArgs) -> Result<()> {
         json!(parse_kvs(&a.scene.scene_params, "--scene-param")?),
     );
     st.insert("triangles".into(), json!(setup.scene.len()));
+    st.insert("warnings".into(), json!(setup.scene.warnings));
     st.insert("shadowlab_version".into(), json!(env!("CARGO_PKG_VERSION")));
     st.insert("camera".into(), cam_json);
     st.insert("light".into(), light_json);
@@ -635,6 +636,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         "scene_source": a.scene.scene,
         "scene_params": parse_kvs(&a.scene.scene_params, "--scene-param")?,
         "triangles": setup.scene.len(),
+        "warnings": setup.scene.warnings,
         "width": view.width, "height": view.height,
         "covered_pixels": view.covered_count(),
         "layer_samples": layers.as_ref().map(|l| l.len()),

@@ -34,6 +34,10 @@ pub struct SceneArgs {
         allow_negative_numbers = true
     )]
     pub camera_distance: Option<f32>,
+    /// Which of the scene's cameras to use: a glTF file's camera nodes in the order its
+    /// node hierarchy is walked (0 = the first).
+    #[arg(long = "camera-index", value_name = "N", default_value_t = 0)]
+    pub camera_index: usize,
     /// Light override: `directional:DX,DY,DZ`, `point:X,Y,Z` or `spot:X,Y,Z:TX,TY,TZ:FOV_DEG`.
     #[arg(long)]
     pub light: Option<String>,
@@ -162,9 +166,13 @@ impl SceneArgs {
         }
         let params = parse_kvs(&self.scene_params, "--scene-param")?;
         let options = scene::LoadOptions {
+            camera_index: self.camera_index,
             allow_outside_scene_dir: self.allow_outside_scene_dir,
         };
         let scene = scene::load_with(&self.scene, &params, &options)?;
+        for w in &scene.warnings {
+            eprintln!("warning: {w}");
+        }
         let mut camera = scene.camera.unwrap_or_else(|| {
             let mut s = scene.clone();
             s.auto_frame(false);

@@ -1074,7 +1074,7 @@ pub fn write_html(dir: &Path, metrics: &Value) -> Result<()> {
 
     let prov = json!({
         "scene_source": metrics["scene_source"], "scene_params": metrics["scene_params"],
-        "camera": metrics["camera"], "light": metrics["light"],
+        "camera": metrics["camera"], "light": metrics["light"], "warnings": metrics["warnings"],
     });
     let _ = write!(
         o,

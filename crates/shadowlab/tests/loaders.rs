@@ -79,6 +79,8 @@ const DATA_MESHES: &[(&str, usize)] = &[
     ("gltf/2CylinderEngine.glb", 121_496),
     ("gltf/Cameras.gltf", 2),
     ("gltf/BoxTextured.glb", 12),
+    ("lenient/edges.obj", 8),
+    ("lenient/lines.gltf", 3),
 ];
 
 #[test]

@@ -53,14 +53,6 @@ pub fn check_triangle_count(path: &Path, triangles: u64) -> Result<()> {
     )
 }
 
-/// How a scene file may refer to other files.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct LoadOptions {
-    /// Let glTF buffer URIs, OBJ `mtllib` lines and TOML mesh `file` paths name files
-    /// outside the scene file's folder (by default they are refused).
-    pub allow_outside_scene_dir: bool,
-}
-
 /// The bytes of the scene or mesh file `path`, which must be a regular file of at most
 /// `limit` bytes.
 pub(crate) fn read_input(path: &Path, limit: u64) -> Result<Vec<u8>> {
@@ -128,6 +120,9 @@ pub struct Scene {
     pub camera_path: Option<CameraPath>,
     /// The scene's own light, if it has one.
     pub light: Option<Light>,
+    /// What the loader skipped or approximated, one sentence per kind (e.g. "bike.obj:
+    /// skipped 201 faces with fewer than 3 vertices"), in the order met.
+    pub warnings: Vec<String>,
 }
 
 impl Scene {
@@ -218,8 +213,14 @@ impl Scene {
         self.materials.iter().any(|m| !m.is_opaque())
     }
 
-    /// Appends all triangles of `other` (materials are appended too).
+    /// Records a warning: something the loader skipped or approximated.
+    pub fn warn(&mut self, what: impl Into<String>) {
+        self.warnings.push(what.into());
+    }
+
+    /// Appends all triangles of `other` (materials and warnings are appended too).
     pub fn append(&mut self, other: &Scene) {
+        self.warnings.extend(other.warnings.iter().cloned());
         let base = self.materials.len() as u32;
         self.materials.extend(other.materials.iter().cloned());
         self.reserve(other.len());
@@ -317,6 +318,17 @@ impl Scene {
     }
 }
 
+/// Choices made while loading a scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Which of the file's cameras to use: a glTF file's camera nodes in the order its
+    /// hierarchy walk meets them; other scenes have at most one (index 0).
+    pub camera_index: usize,
+    /// Let glTF buffer URIs, OBJ `mtllib` lines and TOML mesh `file` paths name files
+    /// outside the scene file's folder (by default they are refused).
+    pub allow_outside_scene_dir: bool,
+}
+
 /// Loads a scene from a spec: a built-in scene name, or a path to a `.toml` scene, an
 /// `.obj`, `.ply`, `.gltf` or `.glb` mesh. `params` are a built-in scene's parameters
 /// (an error for files). Bare meshes are auto-framed; the result is validated.
@@ -324,8 +336,32 @@ pub fn load(spec: &str, params: &BTreeMap<String, String>) -> Result<Scene> {
     load_with(spec, params, &LoadOptions::default())
 }
 
-/// [`load`] with the given [`LoadOptions`].
+/// [`load`] with [`LoadOptions`]; a camera index past the scene's cameras is an error
+/// naming how many it has.
 pub fn load_with(
+    spec: &str,
+    params: &BTreeMap<String, String>,
+    options: &LoadOptions,
+) -> Result<Scene> {
+    let s = load_spec(spec, params, options)?;
+    // The glTF loader checks the index against the file's own cameras.
+    let gltf = Path::new(spec)
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
+    let count = usize::from(s.camera.is_some());
+    if !gltf && options.camera_index > 0 && options.camera_index >= count {
+        return Err(Error::param(format!(
+            "--camera-index {} is out of range: {} has {count} camera{}",
+            options.camera_index,
+            s.name,
+            if count == 1 { " (index 0)" } else { "s" }
+        )));
+    }
+    Ok(s)
+}
+
+fn load_spec(
     spec: &str,
     params: &BTreeMap<String, String>,
     options: &LoadOptions,
@@ -353,7 +389,7 @@ pub fn load_with(
     let mut s = match ext.as_deref() {
         Some("obj") => obj::load_with(path, &access)?,
         Some("ply") => ply::load(path)?,
-        Some("gltf" | "glb") => gltf::load_with(path, &access)?,
+        Some("gltf" | "glb") => gltf::load_with(path, &access, options.camera_index)?,
         Some("toml") => toml::load_with(path, &access)?,
         _ => unreachable!("extension checked above"),
     };

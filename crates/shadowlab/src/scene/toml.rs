@@ -350,7 +350,7 @@ fn load_file(base: &Path, access: &Access, file: &str) -> Msg<Scene> {
     let loaded = match ext.as_str() {
         "obj" => super::obj::load_with(&full, access),
         "ply" => super::ply::load(&full),
-        "gltf" | "glb" => super::gltf::load_with(&full, access),
+        "gltf" | "glb" => super::gltf::load_with(&full, access, 0),
         "toml" => {
             return Err(format!(
                 "{file:?}: a scene file cannot include another scene file"
