@@ -4,6 +4,7 @@
 //! Loaders (OBJ, PLY, glTF 2.0, the TOML scene format) and the built-in generators of the
 //! papers' test scenes live in the submodules; [`load`] picks one from a scene spec.
 
+pub mod auto_light;
 pub mod builtin;
 pub mod export;
 pub mod gltf;
@@ -83,6 +84,9 @@ pub struct Scene {
     pub camera_path: Option<CameraPath>,
     /// The scene's own light, if it has one.
     pub light: Option<Light>,
+    /// True when `light` was chosen by [`Scene::auto_frame`] (see [`auto_light`]) rather
+    /// than given by the scene, so a caller that moves the camera may choose it again.
+    pub auto_light: bool,
 }
 
 impl Scene {
@@ -238,7 +242,8 @@ impl Scene {
 
     /// Gives a bare mesh what it needs to be looked at, whatever its units: a ground
     /// plane under it (at its lowest point, 4× its footprint), a camera that frames it
-    /// and a directional light from above, for whichever of camera and light it lacks.
+    /// and a directional light chosen so that its shadows fall where the camera sees them
+    /// ([`auto_light::choose`]), for whichever of camera and light it lacks.
     pub fn auto_frame(&mut self, add_ground: bool) {
         let b = self.bounds;
         let size = (b.max - b.min).max_element().max(1e-6);
@@ -265,9 +270,9 @@ impl Scene {
             ));
         }
         if self.light.is_none() {
-            self.light = Some(Light::Directional {
-                to_light: vec3(-0.4, 1.0, 0.3).normalize(),
-            });
+            let camera = self.camera.expect("camera set above");
+            self.light = Some(auto_light::choose(self, &camera));
+            self.auto_light = true;
         }
     }
 }
