@@ -189,7 +189,7 @@ impl SceneArgs {
                     };
                     if !crate::progress::quiet() {
                         if let Light::Directional { to_light: d } = l {
-                            eprintln!(
+                            println!(
                                 "automatic light: directional:{:.4},{:.4},{:.4} (chosen so that its shadows fall where the camera sees them; --light overrides it)",
                                 d.x, d.y, d.z
                             );

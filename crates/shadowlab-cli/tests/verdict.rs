@@ -214,8 +214,11 @@ fn the_automatic_light_shadows_what_the_camera_sees_and_is_printed() {
             d[1].as_f64().unwrap(),
             d[2].as_f64().unwrap()
         );
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(err.contains(&printed), "{mesh}: {err:?} lacks {printed:?}");
+        let said = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            said.contains(&printed),
+            "{mesh}: {said:?} lacks {printed:?}"
+        );
         let shadowed = m["reference"]["shadowed_share"].as_f64().unwrap();
         assert!(
             shadowed >= 0.05,

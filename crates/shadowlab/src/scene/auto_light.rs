@@ -108,6 +108,12 @@ pub fn estimates(scene: &Scene, camera: &Camera) -> Vec<Estimate> {
 
 /// The automatic light for `scene` seen by `camera` (see the module doc).
 pub fn choose(scene: &Scene, camera: &Camera) -> Light {
+    let fallback = Light::Directional {
+        to_light: vec3(-0.4, 1.0, 0.3).normalize(),
+    };
+    if scene.is_empty() || !scene.bounds.min.is_finite() || !scene.bounds.max.is_finite() {
+        return fallback;
+    }
     let est = estimates(scene, camera);
     let best = |ok: &dyn Fn(&Estimate) -> bool| {
         est.iter()
@@ -120,9 +126,7 @@ pub fn choose(scene: &Scene, camera: &Camera) -> Light {
     };
     best(&|e| e.facing >= MIN_LIT_FACING)
         .or_else(|| best(&|_| true))
-        .unwrap_or(Light::Directional {
-            to_light: vec3(-0.4, 1.0, 0.3).normalize(),
-        })
+        .unwrap_or(fallback)
 }
 
 #[cfg(test)]

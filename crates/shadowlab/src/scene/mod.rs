@@ -317,6 +317,8 @@ pub fn load(spec: &str, params: &BTreeMap<String, String>) -> Result<Scene> {
         return Err(Error::format(path, "the file holds no triangles"));
     }
     let bare = s.camera.is_none() && s.light.is_none() && ext.as_deref() != Some("toml");
+    // Before auto-framing: the automatic light traces rays, which needs finite geometry.
+    s.validate()?;
     s.auto_frame(bare);
     s.validate()?;
     Ok(s)
