@@ -47,8 +47,8 @@ fn without_timings(v: &Value) -> Value {
     }
 }
 
-/// Every file of a report folder (but `metrics.json` and the HTML, which hold timings)
-/// with its bytes.
+/// Every file of a report folder with its bytes, but those that show timings:
+/// `metrics.json` (compared without them), the HTML and the plots (error against time).
 fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
@@ -56,7 +56,9 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
         for e in std::fs::read_dir(&d).unwrap() {
             let p = e.unwrap().path();
             if p.is_dir() {
-                stack.push(p);
+                if p.file_name().and_then(|n| n.to_str()) != Some("plots") {
+                    stack.push(p);
+                }
             } else if !matches!(
                 p.file_name().and_then(|n| n.to_str()),
                 Some("metrics.json" | "index.html")
