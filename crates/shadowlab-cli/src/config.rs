@@ -5,7 +5,7 @@ use anyhow::{bail, Context, Result};
 use shadowlab::camera::Camera;
 use shadowlab::light::Light;
 use shadowlab::math::{vec3, Vec3};
-use shadowlab::scene::{self, Scene};
+use shadowlab::scene::{self, auto_light, Scene};
 use std::collections::BTreeMap;
 
 /// The scene-related flags every command shares.
@@ -216,11 +216,31 @@ impl SceneArgs {
             }
             camera.scale_distance(f);
         }
+        let framed = scene.camera;
         let light = match &self.light {
             Some(l) => parse_light(l)?,
-            None => scene.light.unwrap_or(Light::Directional {
-                to_light: vec3(-0.4, 1.0, 0.3).normalize(),
-            }),
+            None => match scene.light {
+                Some(l) if !scene.auto_light => l,
+                auto => {
+                    // Chosen for the camera the shadows are seen from.
+                    let mut seen = camera;
+                    seen.fit_depth_range(&scene.bounds);
+                    seen.validate()?;
+                    let l = match (auto, framed) {
+                        (Some(l), Some(c)) if same_view(&c, &camera) => l,
+                        _ => auto_light::choose(&scene, &seen),
+                    };
+                    if !crate::progress::quiet() {
+                        if let Light::Directional { to_light: d } = l {
+                            println!(
+                                "automatic light: directional:{:.4},{:.4},{:.4} (chosen so that its shadows fall where the camera sees them; --light overrides it)",
+                                d.x, d.y, d.z
+                            );
+                        }
+                    }
+                    l
+                }
+            },
         };
         light
             .validate()
@@ -251,6 +271,11 @@ impl SceneArgs {
             frames: self.frames,
         })
     }
+}
+
+/// True when two cameras see the same view (the image size aside).
+fn same_view(a: &Camera, b: &Camera) -> bool {
+    a.eye == b.eye && a.target == b.target && a.up == b.up && a.fov_y_deg == b.fov_y_deg
 }
 
 /// `T.K=V` technique parameters of `compare`, grouped by technique.

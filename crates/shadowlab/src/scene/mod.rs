@@ -4,6 +4,7 @@
 //! Loaders (OBJ, PLY, glTF 2.0, the TOML scene format) and the built-in generators of the
 //! papers' test scenes live in the submodules; [`load`] picks one from a scene spec.
 
+pub mod auto_light;
 pub mod builtin;
 pub mod export;
 pub mod gltf;
@@ -123,6 +124,9 @@ pub struct Scene {
     /// What the loader skipped or approximated, one sentence per kind (e.g. "bike.obj:
     /// skipped 201 faces with fewer than 3 vertices"), in the order met.
     pub warnings: Vec<String>,
+    /// True when `light` was chosen by [`Scene::auto_frame`] (see [`auto_light`]) rather
+    /// than given by the scene, so a caller that moves the camera may choose it again.
+    pub auto_light: bool,
 }
 
 impl Scene {
@@ -284,7 +288,8 @@ impl Scene {
 
     /// Gives a bare mesh what it needs to be looked at, whatever its units: a ground
     /// plane under it (at its lowest point, 4× its footprint), a camera that frames it
-    /// and a directional light from above, for whichever of camera and light it lacks.
+    /// and a directional light chosen so that its shadows fall where the camera sees them
+    /// ([`auto_light::choose`]), for whichever of camera and light it lacks.
     pub fn auto_frame(&mut self, add_ground: bool) {
         let b = self.bounds;
         let size = (b.max - b.min).max_element().max(1e-6);
@@ -311,9 +316,9 @@ impl Scene {
             ));
         }
         if self.light.is_none() {
-            self.light = Some(Light::Directional {
-                to_light: vec3(-0.4, 1.0, 0.3).normalize(),
-            });
+            let camera = self.camera.expect("camera set above");
+            self.light = Some(auto_light::choose(self, &camera));
+            self.auto_light = true;
         }
     }
 }
@@ -414,6 +419,8 @@ fn load_spec(
     }
     let bare = s.camera.is_none() && s.light.is_none() && ext.as_deref() != Some("toml");
     let framed = s.camera.is_none();
+    // Before auto-framing: the automatic light traces rays, which needs finite geometry.
+    s.validate()?;
     s.auto_frame(bare);
     if let (true, Some(mut c)) = (framed, s.camera) {
         c.fit_depth_range(&s.bounds);
