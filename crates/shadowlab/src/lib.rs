@@ -49,8 +49,11 @@ pub mod compare;
 #[allow(unsafe_code)]
 pub mod embree;
 pub mod error;
+pub mod gbuffer;
 pub mod light;
 pub mod math;
+pub mod multi_light;
+pub mod points;
 pub mod raster;
 pub mod reference;
 pub mod sampling;

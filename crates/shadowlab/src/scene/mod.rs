@@ -7,6 +7,7 @@
 pub mod builtin;
 pub mod export;
 pub mod gltf;
+pub mod mesh;
 pub mod obj;
 pub mod ply;
 pub mod toml;
@@ -83,6 +84,12 @@ pub struct Scene {
     pub camera_path: Option<CameraPath>,
     /// The scene's own light, if it has one.
     pub light: Option<Light>,
+    /// Bumped whenever the geometry is edited in place (see [`mesh`]), so techniques that
+    /// keep state for a scene across frames know to rebuild it.
+    pub revision: u64,
+    /// One past the last triangle of each mesh added by [`Scene::from_meshes`] or
+    /// [`Scene::add_mesh`].
+    pub mesh_ends: Vec<usize>,
 }
 
 impl Scene {

@@ -252,6 +252,7 @@ fn power_of_two(key: &str, value: &str, lo: u32, hi: u32) -> Result<u32> {
 struct Fingerprint {
     name: String,
     triangles: usize,
+    revision: u64,
     bounds: Aabb,
     light: Light,
 }
@@ -261,6 +262,7 @@ impl Fingerprint {
         Fingerprint {
             name: frame.scene.name.clone(),
             triangles: frame.scene.len(),
+            revision: frame.scene.revision,
             bounds: frame.scene.bounds,
             light: *frame.light,
         }
