@@ -1700,6 +1700,7 @@ mod tests {
         let fp = Fingerprint {
             name: String::new(),
             triangles: scene.len(),
+            revision: scene.revision,
             bounds: scene.bounds,
             light,
         };
