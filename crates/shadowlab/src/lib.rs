@@ -50,11 +50,14 @@ pub mod compare;
 #[allow(unsafe_code)]
 pub mod embree;
 pub mod error;
+pub mod gbuffer;
 pub mod files;
 pub mod light;
 #[allow(unsafe_code)]
 pub mod limits;
 pub mod math;
+pub mod multi_light;
+pub mod points;
 pub mod raster;
 pub mod reference;
 pub mod sampling;

@@ -8,6 +8,7 @@ pub mod auto_light;
 pub mod builtin;
 pub mod export;
 pub mod gltf;
+pub mod mesh;
 pub mod obj;
 pub mod ply;
 pub mod toml;
@@ -127,6 +128,12 @@ pub struct Scene {
     /// True when `light` was chosen by [`Scene::auto_frame`] (see [`auto_light`]) rather
     /// than given by the scene, so a caller that moves the camera may choose it again.
     pub auto_light: bool,
+    /// Bumped whenever the geometry is edited in place (see [`mesh`]), so techniques that
+    /// keep state for a scene across frames know to rebuild it.
+    pub revision: u64,
+    /// One past the last triangle of each mesh added by [`Scene::from_meshes`] or
+    /// [`Scene::add_mesh`].
+    pub mesh_ends: Vec<usize>,
 }
 
 impl Scene {

@@ -266,6 +266,7 @@ fn power_of_two(key: &str, value: &str, lo: u32, hi: u32) -> Result<u32> {
 struct Fingerprint {
     name: String,
     triangles: usize,
+    revision: u64,
     bounds: Aabb,
     light: Light,
 }
@@ -275,6 +276,7 @@ impl Fingerprint {
         Fingerprint {
             name: frame.scene.name.clone(),
             triangles: frame.scene.len(),
+            revision: frame.scene.revision,
             bounds: frame.scene.bounds,
             light: *frame.light,
         }
@@ -1731,6 +1733,7 @@ mod tests {
         let fp = Fingerprint {
             name: String::new(),
             triangles: scene.len(),
+            revision: scene.revision,
             bounds: scene.bounds,
             light,
         };
