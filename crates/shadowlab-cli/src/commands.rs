@@ -624,7 +624,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         &setup,
         &view,
         layers.as_ref(),
-        &ref_vis,
+        ref_vis,
         ref_layers.as_deref(),
     );
     shade::save_png(&ref_img, &a.out.join("reference.png"))?;

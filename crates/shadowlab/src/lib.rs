@@ -50,8 +50,8 @@ pub mod compare;
 #[allow(unsafe_code)]
 pub mod embree;
 pub mod error;
-pub mod gbuffer;
 pub mod files;
+pub mod gbuffer;
 pub mod light;
 #[allow(unsafe_code)]
 pub mod limits;
