@@ -452,7 +452,7 @@ fn nonsense_refused() {
     );
     let version = gltf_triangle(&tri_data_uri(), 36, "").replace(r#""2.0""#, r#""3.0""#);
     std::fs::write(d.join("v3.gltf"), version).unwrap();
-    refused(&render(&d, "v3.gltf", &[]), &["v3.gltf", "asset.version"]);
+    refused(&render(&d, "v3.gltf", &[]), &["v3.gltf", "asset version"]);
     let spot = gltf_triangle(
         &tri_data_uri(),
         36,

@@ -146,14 +146,14 @@ pub fn load_with(path: &Path, access: &Access, camera_index: usize) -> Result<Sc
     let gltf =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| {
             match json_version(&bytes).filter(|v| !v.starts_with('2')) {
-                Some(v) => fmt(unsupported_version(&format!("asset.version {v:?}"))),
+                Some(v) => fmt(unsupported_version(&format!("asset version {v:?}"))),
                 None => fmt(describe(e)),
             }
         })?;
     let version = &gltf.document.as_json().asset.version;
     if !version.starts_with("2.") {
         return Err(fmt(unsupported_version(&format!(
-            "asset.version {:?}",
+            "asset version {:?}",
             version.chars().take(16).collect::<String>()
         ))));
     }
@@ -180,6 +180,9 @@ pub fn load_with(path: &Path, access: &Access, camera_index: usize) -> Result<Sc
     };
     let planned = loader.walk(true)?;
     super::check_triangle_count(path, planned)?;
+    // The planning walk met every camera and skipped primitive once already.
+    loader.cameras.clear();
+    loader.skipped = Default::default();
     loader.walk(false)?;
     let Loader {
         mut scene,
