@@ -11,6 +11,7 @@ pub mod gltf;
 pub mod mesh;
 pub mod obj;
 pub mod ply;
+mod repeats;
 pub mod toml;
 
 use crate::camera::{Camera, CameraPath, AUTO_VIEW_DIRECTION};
@@ -428,6 +429,13 @@ fn load_spec(
     let framed = s.camera.is_none();
     // Before auto-framing: the automatic light traces rays, which needs finite geometry.
     s.validate()?;
+    let repeated = s.drop_repeated_faces();
+    if repeated > 0 {
+        s.warn(format!(
+            "{}: skipped {repeated} faces that repeat an earlier opaque face exactly",
+            s.name
+        ));
+    }
     s.auto_frame(bare);
     if let (true, Some(mut c)) = (framed, s.camera) {
         c.fit_depth_range(&s.bounds);
