@@ -6,6 +6,7 @@
 
 pub mod builtin;
 pub mod export;
+pub mod fence_leak;
 pub mod gltf;
 pub mod obj;
 pub mod ply;
