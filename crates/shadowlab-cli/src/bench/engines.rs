@@ -3,9 +3,10 @@
 //! the ray-traced reference on the same camera pass.
 //!
 //! For each scene and memory budget (4, 16 and 64 MiB) every technique with a map gets the
-//! largest resolution whose memory fits the budget: its bytes per texel are read from a
-//! probe render at [`PROBE_RESOLUTION`] (so mip chains, channel counts and a point light's
-//! six faces are counted as the technique counts them), and `asm` gets the budget as its
+//! largest resolution whose memory fits the budget: its fixed bytes and bytes per texel are
+//! read from two probe renders at [`PROBE_RESOLUTIONS`] (so mip chains, channel counts, a
+//! point light's six faces and per-sample buffers are counted as the technique counts
+//! them), and `asm` gets the budget as its
 //! `budget-mb`. `afsm`, `raytrace` and the reference have no map to size: they run once per
 //! scene and their own memory is reported. Times are the technique's own frame time (the
 //! shared camera pass excluded), the median of `--repeat` runs after one untimed run; the
@@ -38,8 +39,9 @@ const SCENES: [&str; 6] = [
     "fence-leak",
     "bunny",
 ];
-/// Map side of the probe render that measures a technique's bytes per texel.
-const PROBE_RESOLUTION: u32 = 256;
+/// Map sides of the two probe renders that measure a technique's fixed bytes and bytes per
+/// texel.
+const PROBE_RESOLUTIONS: [u32; 2] = [128, 256];
 /// Time targets (ratios at equal memory).
 const CASCADED_TIME_TARGET: f64 = 1.5;
 const MSM_TIME_TARGET: f64 = 1.3;
@@ -81,11 +83,16 @@ fn sizing_key(t: &dyn ShadowTechnique) -> Option<&'static str> {
     }
 }
 
-/// The resolution whose memory fits `budget` bytes for a technique that took `probe_bytes`
-/// at [`PROBE_RESOLUTION`].
-fn fitting_resolution(probe_bytes: u64, budget: u64) -> u32 {
-    let per_texel = probe_bytes.max(1) as f64 / (PROBE_RESOLUTION as f64).powi(2);
-    ((budget as f64 / per_texel).sqrt().floor() as u32).clamp(16, 16384)
+/// The resolution whose memory fits `budget` bytes for a technique that took `probe[i]`
+/// bytes at [`PROBE_RESOLUTIONS`]`[i]`: memory is taken as fixed bytes plus bytes per texel.
+fn fitting_resolution(probe: [u64; 2], budget: u64) -> u32 {
+    let [r0, r1] = PROBE_RESOLUTIONS.map(|r| (r as f64).powi(2));
+    let per_texel = ((probe[1] as f64 - probe[0] as f64) / (r1 - r0)).max(1e-9);
+    let fixed = (probe[0] as f64 - per_texel * r0).max(0.0);
+    (((budget as f64 - fixed).max(0.0) / per_texel)
+        .sqrt()
+        .floor() as u32)
+        .clamp(16, 16384)
 }
 
 /// Renders `t` on `frame`: median time of `repeat` runs after an untimed one, the result.
@@ -144,8 +151,12 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
             let key = sizing_key(t.as_ref());
             let probe = match key {
                 Some("resolution") => {
-                    t.set_param("resolution", &PROBE_RESOLUTION.to_string())?;
-                    Some(t.render(&frame)?.stats.memory_bytes)
+                    let mut bytes = [0u64; 2];
+                    for (b, r) in bytes.iter_mut().zip(PROBE_RESOLUTIONS) {
+                        t.set_param("resolution", &r.to_string())?;
+                        *b = t.render(&frame)?.stats.memory_bytes;
+                    }
+                    Some(bytes)
                 }
                 _ => None,
             };
@@ -357,12 +368,14 @@ mod tests {
 
     #[test]
     fn resolutions_fit_the_budget() {
+        let bytes =
+            |fixed: u64, per: u64| PROBE_RESOLUTIONS.map(|r| fixed + per * (r as u64).pow(2));
         // 4 bytes a texel: a 16 MiB budget is one 2048² map.
-        let probe = 4 * (PROBE_RESOLUTION as u64).pow(2);
-        assert_eq!(fitting_resolution(probe, 16 << 20), 2048);
-        // 16 bytes a texel plus a third for mips.
-        let probe = 16 * (PROBE_RESOLUTION as u64).pow(2) * 4 / 3;
-        let r = fitting_resolution(probe, 64 << 20) as u64;
-        assert!(r * r * 16 * 4 / 3 <= 64 << 20 && (r + 1) * (r + 1) * 16 * 4 / 3 > 64 << 20);
+        assert_eq!(fitting_resolution(bytes(0, 4), 16 << 20), 2048);
+        // Fixed buffers come off the budget first.
+        assert_eq!(fitting_resolution(bytes(12 << 20, 4), 16 << 20), 1024);
+        // 16 bytes a texel plus a third for mips (as a whole number of bytes per texel, 21).
+        let r = fitting_resolution(bytes(0, 21), 64 << 20) as u64;
+        assert!(r * r * 21 <= 64 << 20 && (r + 1) * (r + 1) * 21 > 64 << 20);
     }
 }

@@ -47,9 +47,12 @@ pub const DEFAULT_MOMENT_BIAS_32: f32 = 1e-7;
 /// Default storage: the paper's 16-bit optimized quantization (64 bits a texel, the same
 /// memory as a 32-bit float VSM).
 pub const DEFAULT_BITS: Bits = Bits::B16;
-/// Default depth bias in normalized depth: none; the moment bias already keeps a flat lit
-/// receiver almost fully lit.
-pub const DEFAULT_DEPTH_BIAS: f32 = 0.0;
+/// Default depth bias in normalized depth (5·10⁻⁴ of the fitted depth range): removes the
+/// speckled self-shadowing that the rounding of 16-bit moments leaves on lit receivers far
+/// from the light, where the moments of one depth are least separable; on `fence-leak` it
+/// lowers the mean error from 0.0148 to 0.0119 (larger values, 2·10⁻³ to 5·10⁻³, start to
+/// detach contact shadows and the error rises again).
+pub const DEFAULT_DEPTH_BIAS: f32 = 5e-4;
 
 /// The paper's optimized quantization matrix Θ (rows: the stored channels; columns: the
 /// moments z, z², z³, z⁴).
