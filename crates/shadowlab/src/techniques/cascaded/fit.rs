@@ -61,6 +61,9 @@ pub fn slice_sphere(camera: &Camera, d0: f32, d1: f32) -> (f32, f32) {
     let r = ((c - d0).powi(2) + k2 * d0 * d0)
         .max((d1 - c).powi(2) + k2 * d1 * d1)
         .sqrt();
+    if !(r > 0.0 && r.is_finite()) {
+        return (c as f32, r as f32);
+    }
     // Rounded up to a multiple of 2⁻¹⁶ of itself so tiny changes of d0, d1 (rounding of the
     // split formula) cannot change the window's size.
     let q = 2f64.powi(r.log2().floor() as i32 - 16);
@@ -188,8 +191,15 @@ mod tests {
             let mut cam = base;
             cam.target = cam.eye + vec3(rnd() * 4.0, rnd(), rnd() * 4.0 - 3.0);
             let w = fit_window(&cam, &basis, &scene(), slice, res, true);
-            assert_eq!(w.x1 - w.x0, w0.x1 - w0.x0);
-            assert_eq!(w.y1 - w.y0, w0.y1 - w0.y0);
+            // The same radius on both sides of a different centre: equal up to the
+            // rounding of centre ± radius.
+            let size = w0.x1 - w0.x0;
+            assert!(((w.x1 - w.x0) - size).abs() <= 1e-5 * size);
+            assert!(((w.y1 - w.y0) - (w0.y1 - w0.y0)).abs() <= 1e-5 * size);
+            assert_eq!(
+                slice_sphere(&cam, slice.0, slice.1).1,
+                slice_sphere(&base, slice.0, slice.1).1
+            );
         }
     }
 
