@@ -84,18 +84,16 @@ fn vsm_leaks_on_the_leak_scene_and_evsm_msm_do_less() {
     // area average is that of a 4×4 grid: at most 1/16 per edge-crossing pixel).
     let r = s.reference(16);
     let leak = |v: &Visibility| {
-        // Pixels the reference finds fully shadowed where the technique lets half the light
-        // or more through.
-        let (mut n, mut leaks) = (0usize, 0usize);
+        // The mean light let through where the reference is fully shadowed (VSM's leaks
+        // are partial: a faint light inside the shadow, not a flipped pixel).
+        let (mut n, mut sum) = (0usize, 0f64);
         for k in 0..v.value.len() {
             if s.view.covered(k) && s.frame().receiver_lit(k) && r.value[k].x <= 0.0 {
                 n += 1;
-                if v.value[k].x >= 0.5 {
-                    leaks += 1;
-                }
+                sum += v.value[k].x as f64;
             }
         }
-        leaks as f64 / n.max(1) as f64
+        sum / n.max(1) as f64
     };
     let vsm = s.run("vsm", &[]);
     let evsm = s.run("evsm", &[]);
@@ -107,7 +105,7 @@ fn vsm_leaks_on_the_leak_scene_and_evsm_msm_do_less() {
         leak(&vsm), leak(&evsm), leak(&msm), leak(&csm), err(&vsm), err(&evsm), err(&msm), err(&csm)
     );
     assert!(
-        leak(&vsm) > 0.002,
+        leak(&vsm) > 0.001,
         "vsm does not leak visibly: {}",
         leak(&vsm)
     );
