@@ -73,7 +73,7 @@ pub struct Cascaded {
     pub resolution: u32,
     /// Number of cascades.
     pub cascades: usize,
-    /// Side of each cascade's map; 0 for the share of `resolution²`.
+    /// Side of each cascade's map; 0 (`auto`) for the share of `resolution²`.
     pub cascade_resolution: u32,
     /// λ of the practical split scheme.
     pub lambda: f32,
@@ -366,8 +366,12 @@ impl ShadowTechnique for Cascaded {
                 self.cascades = check_range(t, key, parse_value(t, key, value)?, 1, MAX_CASCADES)?
             }
             "cascade-resolution" => {
-                let r: u32 = parse_value(t, key, value)?;
-                self.cascade_resolution = if r == 0 { 0 } else { check_resolution(t, r)? };
+                // `auto`: the share of `resolution²`; a number is checked like any map side.
+                self.cascade_resolution = if value.trim() == "auto" {
+                    0
+                } else {
+                    check_resolution(t, parse_value(t, key, value)?)?
+                };
             }
             "lambda" => self.lambda = check_range(t, key, parse_value(t, key, value)?, 0.0, 1.0)?,
             "stabilize" => {
