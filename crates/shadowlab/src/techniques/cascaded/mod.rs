@@ -370,7 +370,8 @@ impl ShadowTechnique for Cascaded {
                 self.cascade_resolution = if value.trim() == "auto" {
                     0
                 } else {
-                    check_resolution(t, parse_value(t, key, value)?)?
+                    let r = parse_value(t, key, value)?;
+                    check_range(t, key, r, 1, crate::raster::MAX_RASTER_SIDE)?
                 };
             }
             "lambda" => self.lambda = check_range(t, key, parse_value(t, key, value)?, 0.0, 1.0)?,
