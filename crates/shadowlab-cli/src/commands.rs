@@ -1,6 +1,7 @@
 //! `render`, `compare` and `scenes`.
 
 use crate::config::{parse_kvs, parse_prefixed_params, SceneArgs, Setup};
+use crate::outputs::{self, Planned};
 use crate::{progress, report};
 use anyhow::{bail, Context, Result};
 use serde_json::{json, Value};
@@ -73,9 +74,11 @@ pub struct CompareArgs {
     /// One result per value of a technique parameter: `sm.resolution=512,1024,2048`.
     #[arg(long = "sweep", value_name = "T.K=V1,V2,...")]
     pub sweeps: Vec<String>,
-    /// Primary rays per pixel of the reference (at sub-pixel positions when > 1).
-    #[arg(long = "reference-spp", default_value_t = 1)]
-    pub reference_spp: u32,
+    /// Primary rays per pixel of the reference (at sub-pixel positions when > 1), for every
+    /// technique. Default: 1 for hard-shadow techniques, 16 for those that filter or
+    /// anti-alias (pcf, subpixel, csm, vsm), each judged against its own.
+    #[arg(long = "reference-spp")]
+    pub reference_spp: Option<u32>,
     /// Sub-pixel pattern of the supersampled reference: grid or rotated-grid.
     #[arg(long = "reference-pattern", default_value = "grid")]
     pub reference_pattern: String,
@@ -140,16 +143,51 @@ fn stats_json(s: &Shadows, time_ms: f64) -> serde_json::Map<String, Value> {
     m
 }
 
-/// Refuses to overwrite a file the user did not ask to overwrite.
-fn check_new_file(path: &Path, force: bool, flag: &str) -> Result<()> {
-    if path.exists() && !force {
-        return Err(BadInput(format!(
-            "{flag} {} already exists; pass --force to overwrite it",
-            path.display()
-        ))
-        .into());
+/// The most values one `--sweep` may list.
+pub const MAX_SWEEP_VALUES: usize = 64;
+
+/// The most runs one `compare` may plan (techniques times sweep values): each keeps its
+/// result for the report until the end.
+pub const MAX_RUNS: usize = 128;
+
+/// The file of frame `i` of a sequence written beside `output`.
+fn frame_file(output: &Path, i: usize) -> PathBuf {
+    let stem = output.with_extension("");
+    PathBuf::from(format!("{}-{i:04}.png", stem.display()))
+}
+
+/// Every file `render` will write, checked before any work.
+fn check_render_outputs(a: &RenderArgs) -> Result<()> {
+    let mut planned = vec![Planned::new(&a.output, "--output", &["png"])];
+    if a.scene.frames > 1 && a.scene.frames <= crate::config::MAX_FRAMES {
+        for i in 0..a.scene.frames {
+            planned.push(Planned::new(
+                &frame_file(&a.output, i),
+                format!("--output (frame {i})"),
+                &[],
+            ));
+        }
+        planned.push(Planned::new(
+            &a.output.with_extension("gif"),
+            "--output (animation)",
+            &[],
+        ));
     }
-    Ok(())
+    if let Some(p) = &a.visibility {
+        planned.push(Planned::new(p, "--visibility", &["exr"]));
+    }
+    if let Some(p) = &a.stats {
+        planned.push(Planned::new(p, "--stats", &["json"]));
+    }
+    if let Some(p) = &a.export_scene {
+        planned.push(Planned::new(p, "--export-scene", &["obj"]));
+        planned.push(Planned::new(
+            &p.with_extension("mtl"),
+            "--export-scene (materials)",
+            &[],
+        ));
+    }
+    outputs::check(&planned, a.force)
 }
 
 /// Makes a technique with `params` applied.
@@ -173,8 +211,10 @@ pub struct Run {
 /// Renders frame `i`: the camera pass, shared by all techniques.
 pub fn camera_pass(setup: &Setup, i: usize) -> Result<(Camera, ViewSamples)> {
     let camera = setup.camera_at(i);
-    camera.validate()?;
-    let view = ViewSamples::render(&setup.scene, &camera);
+    camera
+        .validate()
+        .with_context(|| format!("frame {i} of the camera path of {}", setup.scene.name))?;
+    let view = ViewSamples::try_render(&setup.scene, &camera)?;
     Ok((camera, view))
 }
 
@@ -217,6 +257,36 @@ fn shade_result(
     }
 }
 
+/// The most frames a still view gives a progressive technique to converge in.
+pub const MAX_STILL_FRAMES: usize = 64;
+
+/// Techniques whose shadow terms are filtered or anti-aliased (soft or fractional at
+/// edges): by default `compare` judges them against a supersampled reference.
+pub const FILTERED: &[&str] = &["pcf", "subpixel", "csm", "vsm", "evsm", "msm", "pcss"];
+
+/// Samples per pixel of the default reference for [`FILTERED`] techniques: a 4×4 grid,
+/// whose own error on an edge pixel is at most 1/32 of the pixel's area.
+pub const FILTERED_REFERENCE_SPP: u32 = 16;
+
+/// The reference samples per pixel that a technique's verdict uses.
+pub fn reference_spp_for(technique: &str, asked: Option<u32>) -> u32 {
+    match asked {
+        Some(n) => n,
+        None if FILTERED.contains(&technique) => FILTERED_REFERENCE_SPP,
+        None => 1,
+    }
+}
+
+/// Renders a still frame: a progressive technique (see [`ShadowTechnique::converged`]) is
+/// run on it again until it converges or has had [`MAX_STILL_FRAMES`] frames.
+fn run_still(run: &mut Run, frame: &Frame) -> Result<()> {
+    run_frame(run, frame)?;
+    while run.technique.converged() == Some(false) && run.frames.len() < MAX_STILL_FRAMES {
+        run_frame(run, frame)?;
+    }
+    Ok(())
+}
+
 fn run_frame(run: &mut Run, frame: &Frame) -> Result<()> {
     let t0 = Instant::now();
     let s = run
@@ -232,21 +302,13 @@ fn run_frame(run: &mut Run, frame: &Frame) -> Result<()> {
 
 /// `shadowlab render`.
 pub fn render(a: &RenderArgs) -> Result<()> {
-    for (p, flag) in [
-        (Some(&a.output), "--output"),
-        (a.visibility.as_ref(), "--visibility"),
-        (a.stats.as_ref(), "--stats"),
-        (a.export_scene.as_ref(), "--export-scene"),
-    ] {
-        if let Some(p) = p {
-            check_new_file(p, a.force, flag)?;
-        }
-    }
+    check_render_outputs(a)?;
     let params = parse_kvs(&a.params, "--param")?;
     let params: Vec<(String, String)> = params.into_iter().collect();
     let technique = make_technique(&a.technique, &params)?;
     let pb = progress::step(format!("loading {}", a.scene.scene));
     let setup = a.scene.resolve()?;
+    setup.check_pixel_budget(1)?;
     pb.finish_and_clear();
     let mut run = Run {
         label: a.technique.clone(),
@@ -265,7 +327,6 @@ pub fn render(a: &RenderArgs) -> Result<()> {
     let mut animation = None;
     if a.scene.frames > 1 {
         let gif = a.output.with_extension("gif");
-        check_new_file(&gif, a.force, "--output animation")?;
         animation = Some(report::Animation::create(&gif)?);
     }
     for i in 0..setup.frames {
@@ -278,12 +339,15 @@ pub fn render(a: &RenderArgs) -> Result<()> {
         }
         frame.index = i;
         frame.dump_dir = a.dump.as_deref();
-        run_frame(&mut run, &frame)?;
+        if setup.frames == 1 {
+            run_still(&mut run, &frame)?;
+        } else {
+            run_frame(&mut run, &frame)?;
+        }
         if a.scene.frames > 1 {
             let s = &run.last.as_ref().unwrap().0;
             let img = shade_shadows(&setup, &view, layers.as_ref(), s);
-            let stem = a.output.with_extension("");
-            shade::save_png(&img, Path::new(&format!("{}-{i:04}.png", stem.display())))?;
+            shade::save_png(&img, &frame_file(&a.output, i))?;
             if let Some(anim) = animation.as_mut() {
                 anim.push(&img)?;
             }
@@ -317,6 +381,7 @@ pub fn render(a: &RenderArgs) -> Result<()> {
         json!(parse_kvs(&a.scene.scene_params, "--scene-param")?),
     );
     st.insert("triangles".into(), json!(setup.scene.len()));
+    st.insert("warnings".into(), json!(setup.scene.warnings));
     st.insert("shadowlab_version".into(), json!(env!("CARGO_PKG_VERSION")));
     st.insert("camera".into(), cam_json);
     st.insert("light".into(), light_json);
@@ -330,20 +395,33 @@ pub fn render(a: &RenderArgs) -> Result<()> {
     if a.scene.frames > 1 {
         st.insert("frames".into(), json!(run.frames));
     }
+    st.insert("frames_run".into(), json!(run.frames.len()));
+    st.insert("converged".into(), json!(run.technique.converged()));
     if let Some(p) = &a.stats {
         write_json(p, &Value::Object(st))?;
     }
     pb.finish_and_clear();
     if !progress::quiet() {
         eprintln!(
-            "{}: {} in {:.1} ms, wrote {}",
+            "{}: {} in {:.1} ms{}, wrote {}",
             setup.scene.name,
             run.label,
             time_ms,
+            frames_note(run.frames.len(), run.technique.converged(), setup.frames),
             a.output.display()
         );
     }
     Ok(())
+}
+
+/// How many frames a progressive technique had, for the terminal: empty for the others.
+fn frames_note(frames: usize, converged: Option<bool>, asked: usize) -> String {
+    match converged {
+        None => String::new(),
+        Some(_) if asked > 1 => format!(" (last of {frames} frames)"),
+        Some(true) => format!(" (converged after {frames} frames)"),
+        Some(false) => format!(" (not converged after {frames} frames, the cap)"),
+    }
 }
 
 /// Writes pretty JSON.
@@ -394,6 +472,12 @@ fn plan_runs(a: &CompareArgs) -> Result<Vec<PlannedRun>> {
         if vals.is_empty() {
             bail!("--sweep {s:?} lists no values");
         }
+        if vals.len() > MAX_SWEEP_VALUES {
+            bail!(
+                "--sweep {tk} lists {} values, more than the limit of {MAX_SWEEP_VALUES}",
+                vals.len()
+            );
+        }
         sweeps.push((t.trim().to_string(), k.trim().to_string(), vals));
     }
     let mut runs = Vec::new();
@@ -420,32 +504,19 @@ fn plan_runs(a: &CompareArgs) -> Result<Vec<PlannedRun>> {
             );
         }
     }
-    Ok(runs)
-}
-
-/// Checks the report folder: it may be new, empty, or an earlier report; anything else
-/// needs `--force`.
-fn prepare_out(dir: &Path, force: bool) -> Result<()> {
-    if dir.exists() {
-        if !dir.is_dir() {
-            return Err(BadInput(format!(
-                "--out {} exists and is not a folder",
-                dir.display()
-            ))
-            .into());
-        }
-        let non_empty = std::fs::read_dir(dir)?.next().is_some();
-        let is_report = dir.join("metrics.json").is_file();
-        if non_empty && !is_report && !force {
-            return Err(BadInput(format!(
-                "--out {} is a non-empty folder that is not a shadowlab report; pass --force to write into it",
-                dir.display()
-            ))
-            .into());
+    if runs.len() > MAX_RUNS {
+        bail!(
+            "--techniques and --sweep plan {} runs, more than the limit of {MAX_RUNS}",
+            runs.len()
+        );
+    }
+    let mut files = std::collections::BTreeMap::new();
+    for (_, label, _) in &runs {
+        if let Some(other) = files.insert(slug(label), label) {
+            bail!("runs {other} and {label} would write the same report files; give them distinct values");
         }
     }
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    Ok(())
+    Ok(runs)
 }
 
 /// File-name-safe form of a run label.
@@ -465,7 +536,6 @@ pub fn slug(s: &str) -> String {
 pub fn compare(a: &CompareArgs) -> Result<()> {
     let plan = plan_runs(a)?;
     let kind: PatternKind = a.reference_pattern.parse()?;
-    let samples = pattern(kind, a.reference_spp)?;
     let mut runs = Vec::new();
     for (name, label, params) in &plan {
         runs.push(Run {
@@ -475,10 +545,13 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             frames: Vec::new(),
         });
     }
-    prepare_out(&a.out, a.force)?;
+    let (spps, sample_sets) = plan_references(&runs, a, kind)?;
+    outputs::check_report_dir(&a.out, a.force)?;
     let pb = progress::step(format!("loading {}", a.scene.scene));
     let setup = a.scene.resolve()?;
+    setup.check_pixel_budget(runs.len() + 1)?;
     pb.finish_and_clear();
+    outputs::create_report_dir(&a.out)?;
     let dump = a.dump.then(|| a.out.join("dump"));
     if let Some(d) = &dump {
         std::fs::create_dir_all(d)?;
@@ -509,7 +582,11 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         frame.dump_dir = dump.as_deref();
         for (r, run) in runs.iter_mut().enumerate() {
             bar.set_message(format!("frame {}/{} {}", i + 1, setup.frames, run.label));
-            run_frame(run, &frame)?;
+            if setup.frames == 1 {
+                run_still(run, &frame)?;
+            } else {
+                run_frame(run, &frame)?;
+            }
             if let Some(anim) = animations.get_mut(r) {
                 let (s, _) = run.last.as_ref().expect("just rendered");
                 let img = shade_shadows(&setup, &view, layers.as_ref(), s);
@@ -530,11 +607,13 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     }
     let (camera, view, layers) = last.expect("at least one frame");
     let frame = Frame::new(&setup.scene, &camera, &setup.light, &view);
-    let pb = progress::step(format!("ray-traced reference ({} spp)", a.reference_spp));
+    let spp_text: Vec<String> = spps.iter().map(|n| format!("{n} spp")).collect();
+    let pb = progress::step(format!("ray-traced reference ({})", spp_text.join(", ")));
     let t0 = Instant::now();
     let reference = Reference::build(&setup.scene);
     let bvh_ms = reference.build_ms;
-    let ref_vis = reference.visibility(&frame, &samples);
+    let refs = trace_references(&reference, &frame, &spps, &sample_sets);
+    let ref_vis = &refs[0].1;
     let ref_ms = t0.elapsed().as_secs_f64() * 1e3;
     let ref_layers = layers
         .as_ref()
@@ -548,18 +627,35 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         &setup,
         &view,
         layers.as_ref(),
-        &ref_vis,
+        ref_vis,
         ref_layers.as_deref(),
     );
     shade::save_png(&ref_img, &a.out.join("reference.png"))?;
+    let mut ref_json = Vec::new();
+    for (i, (n, vis, ms)) in refs.iter().enumerate() {
+        let image = if i == 0 {
+            "reference.png".to_string()
+        } else {
+            let name = format!("reference-{n}spp.png");
+            let img = shade_result(&setup, &view, layers.as_ref(), vis, ref_layers.as_deref());
+            shade::save_png(&img, &a.out.join(&name))?;
+            name
+        };
+        ref_json.push(json!({
+            "samples_per_pixel": n, "trace_ms": ms, "image": image,
+            "shadowed_share": shadowed_share(&view, vis),
+        }));
+    }
     bar.inc(1);
     for run in &runs {
         let (s, ms) = run.last.as_ref().expect("every run rendered");
         bar.set_message(format!("writing {}", run.label));
-        let m: Metrics = measure(&view, &s.visibility, &ref_vis);
+        let spp = reference_spp_for(run.technique.name(), a.reference_spp);
+        let ref_vis = &refs.iter().find(|r| r.0 == spp).expect("made above").1;
+        let m: Metrics = measure(&view, &s.visibility, ref_vis);
         let file = slug(&run.label);
         let shaded = shade_shadows(&setup, &view, layers.as_ref(), s);
-        let error_img = shade::error_image(&view, &s.visibility, &ref_vis);
+        let error_img = shade::error_image(&view, &s.visibility, ref_vis);
         shade::save_png(&shaded, &a.out.join(format!("{file}.png")))?;
         shade::save_png(&error_img, &a.out.join(format!("{file}-error.png")))?;
         let mut r = serde_json::Map::new();
@@ -570,6 +666,9 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         r.insert("mismatch_rate".into(), json!(m.mismatch_rate));
         r.insert("mean_abs_error".into(), json!(m.mean_abs_error));
         r.insert("mean_abs_error_rgb".into(), json!(m.mean_abs_error_rgb));
+        r.insert("reference_spp".into(), json!(spp));
+        r.insert("frames_run".into(), json!(run.frames.len()));
+        r.insert("converged".into(), json!(run.technique.converged()));
         if let (Some(ours), Some(truth)) = (&s.layers, &ref_layers) {
             let lm = shadowlab::compare::compare_samples(ours, truth);
             r.insert("layer_samples".into(), json!(ours.len()));
@@ -594,7 +693,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         }
         r.insert(
             "worst_region".into(),
-            match report::worst_region(&view, &s.visibility, &ref_vis) {
+            match report::worst_region(&view, &s.visibility, ref_vis) {
                 Some(region) => region.to_json(&report::write_crop(
                     &a.out,
                     &file,
@@ -604,7 +703,11 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
                 None => Value::Null,
             },
         );
-        rows.push((run.label.clone(), *ms, m));
+        let frames = match run.technique.converged() {
+            None => String::new(),
+            Some(c) => format!("{}{}", run.frames.len(), if c { "" } else { " (cap)" }),
+        };
+        rows.push((run.label.clone(), *ms, m, spp, frames));
         results.push(Value::Object(r));
         bar.inc(1);
     }
@@ -615,6 +718,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         "scene_source": a.scene.scene,
         "scene_params": parse_kvs(&a.scene.scene_params, "--scene-param")?,
         "triangles": setup.scene.len(),
+        "warnings": setup.scene.warnings,
         "width": view.width, "height": view.height,
         "covered_pixels": view.covered_count(),
         "layer_samples": layers.as_ref().map(|l| l.len()),
@@ -624,11 +728,13 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         "shadowlab_version": env!("CARGO_PKG_VERSION"),
         "camera": cam_json, "light": light_json,
         "reference": {
-            "technique": "raytrace", "samples_per_pixel": a.reference_spp,
+            "technique": "raytrace", "samples_per_pixel": spps[0],
             "pattern": a.reference_pattern,
             "time_ms": ref_ms, "bvh_build_ms": bvh_ms, "trace_ms": ref_ms - bvh_ms,
             "image": "reference.png",
+            "shadowed_share": shadowed_share(&view, ref_vis),
         },
+        "references": ref_json,
         "results": results,
         "dump": dump.as_ref().map(|_| "dump"),
     });
@@ -637,34 +743,110 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     report::write_html(&a.out, &metrics)?;
     pb.finish_and_clear();
     if !progress::quiet() {
-        println!(
-            "{} — {} triangles, {}x{}, {} covered pixels; camera pass {:.1} ms; reference {:.1} ms (BVH {:.1} + trace {:.1})",
-            setup.scene.name,
-            setup.scene.len(),
-            view.width,
-            view.height,
-            view.covered_count(),
-            view.time_ms,
-            ref_ms,
-            bvh_ms,
-            ref_ms - bvh_ms
-        );
-        println!(
-            "{:<28} {:>10} {:>10} {:>10}",
-            "technique", "time ms", "mismatch", "mean err"
-        );
-        for (label, ms, m) in &rows {
-            println!(
-                "{:<28} {:>10.2} {:>9.4}% {:>10.5}",
-                label,
-                ms,
-                m.mismatch_rate * 100.0,
-                m.mean_abs_error
-            );
-        }
+        print_table(&setup, &view, (ref_ms, bvh_ms), &rows);
         println!("report: {}", a.out.join("index.html").display());
     }
     Ok(())
+}
+
+/// The reference sample counts the verdicts of `runs` ask for, the highest first, with
+/// their sub-pixel patterns; a note on stderr when `--reference-spp 1` judges a filtering
+/// technique.
+fn plan_references(
+    runs: &[Run],
+    a: &CompareArgs,
+    kind: PatternKind,
+) -> Result<(Vec<u32>, Vec<Vec<shadowlab::math::Vec2>>)> {
+    // One reference per sample count the verdicts ask for, the highest first.
+    let mut spps: Vec<u32> = runs
+        .iter()
+        .map(|r| reference_spp_for(r.technique.name(), a.reference_spp))
+        .collect();
+    spps.sort_unstable_by(|x, y| y.cmp(x));
+    spps.dedup();
+    let sets = spps
+        .iter()
+        .map(|&n| pattern(kind, n))
+        .collect::<shadowlab::error::Result<Vec<_>>>()?;
+    if a.reference_spp == Some(1) && !progress::quiet() {
+        let filtered = runs
+            .iter()
+            .map(|r| r.technique.name())
+            .find(|t| FILTERED.contains(t));
+        if let Some(t) = filtered {
+            eprintln!(
+                "note: {t} filters or anti-aliases its shadows, and --reference-spp 1 judges it against one sample per pixel; \
+                 the default ({FILTERED_REFERENCE_SPP} samples) judges soft and sub-pixel edges fairly"
+            );
+        }
+    }
+    Ok((spps, sets))
+}
+
+/// One reference per sample count of `spps` (the highest first): samples per pixel, the
+/// reference visibility, and its trace time in milliseconds.
+fn trace_references(
+    reference: &Reference,
+    frame: &Frame,
+    spps: &[u32],
+    sample_sets: &[Vec<shadowlab::math::Vec2>],
+) -> Vec<(u32, shadowlab::techniques::Visibility, f64)> {
+    spps.iter()
+        .zip(sample_sets)
+        .map(|(&n, samples)| {
+            let t = Instant::now();
+            let vis = reference.visibility(frame, samples);
+            (n, vis, t.elapsed().as_secs_f64() * 1e3)
+        })
+        .collect()
+}
+
+/// One verdict of the terminal table: label, time, metrics, reference samples, frames.
+type TableRow = (String, f64, Metrics, u32, String);
+
+/// The terminal table of `compare`: one line per run, with the reference each verdict used
+/// and the frames of progressive techniques.
+fn print_table(setup: &Setup, view: &ViewSamples, (ref_ms, bvh_ms): (f64, f64), rows: &[TableRow]) {
+    println!(
+        "{} — {} triangles, {}x{}, {} covered pixels; camera pass {:.1} ms; reference {:.1} ms (BVH {:.1} + trace {:.1})",
+        setup.scene.name,
+        setup.scene.len(),
+        view.width,
+        view.height,
+        view.covered_count(),
+        view.time_ms,
+        ref_ms,
+        bvh_ms,
+        ref_ms - bvh_ms
+    );
+    println!(
+        "{:<28} {:>10} {:>10} {:>10} {:>8} {:>8}",
+        "technique", "time ms", "mismatch", "mean err", "ref spp", "frames"
+    );
+    for (label, ms, m, spp, frames) in rows {
+        println!(
+            "{:<28} {:>10.2} {:>9.4}% {:>10.5} {:>8} {:>8}",
+            label,
+            ms,
+            m.mismatch_rate * 100.0,
+            m.mean_abs_error,
+            spp,
+            frames
+        );
+    }
+    println!(
+        "each verdict is against the ray-traced reference at its \"ref spp\" samples per pixel; \
+         \"frames\": the frames a progressive technique had on this still view (until converged, at most {MAX_STILL_FRAMES})"
+    );
+}
+
+/// Share of a frame's covered pixels that the reference puts in shadow (term below 0.5).
+fn shadowed_share(view: &ViewSamples, vis: &shadowlab::techniques::Visibility) -> f64 {
+    let covered = view.covered_count().max(1);
+    let dark = (0..vis.value.len())
+        .filter(|&k| view.covered(k) && vis.value[k].max_element() < 0.5)
+        .count();
+    dark as f64 / covered as f64
 }
 
 /// `shadowlab scenes`.

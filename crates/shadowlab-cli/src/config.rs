@@ -5,7 +5,7 @@ use anyhow::{bail, Context, Result};
 use shadowlab::camera::Camera;
 use shadowlab::light::Light;
 use shadowlab::math::{vec3, Vec3};
-use shadowlab::scene::{self, Scene};
+use shadowlab::scene::{self, auto_light, Scene};
 use std::collections::BTreeMap;
 
 /// The scene-related flags every command shares.
@@ -34,6 +34,10 @@ pub struct SceneArgs {
         allow_negative_numbers = true
     )]
     pub camera_distance: Option<f32>,
+    /// Which of the scene's cameras to use: a glTF file's camera nodes in the order its
+    /// node hierarchy is walked (0 = the first).
+    #[arg(long = "camera-index", value_name = "N", default_value_t = 0)]
+    pub camera_index: usize,
     /// Light override: `directional:DX,DY,DZ`, `point:X,Y,Z` or `spot:X,Y,Z:TX,TY,TZ:FOV_DEG`.
     #[arg(long)]
     pub light: Option<String>,
@@ -45,6 +49,10 @@ pub struct SceneArgs {
     /// surface only).
     #[arg(long)]
     pub layers: bool,
+    /// Let a scene file's references (glTF buffer URIs, OBJ `mtllib`, TOML mesh `file`)
+    /// name files outside its folder; by default they are refused.
+    #[arg(long = "allow-outside-scene-dir")]
+    pub allow_outside_scene_dir: bool,
 }
 
 /// A loaded scene with its resolved camera (first frame), light and path.
@@ -58,7 +66,35 @@ pub struct Setup {
 /// The most frames a sequence may have.
 pub const MAX_FRAMES: usize = 100_000;
 
+/// Bytes a frame holds per pixel whatever the techniques: the camera pass's samples (68),
+/// the rasterizer's depth and id tiles while they are assembled (16), the shaded images
+/// and the animation frame (about 12), and the technique's per-pixel working set (afsm's
+/// samples and lists, the largest, about 32).
+pub const BYTES_PER_PIXEL: u64 = 128;
+
+/// Bytes each result kept until the end of a run holds per pixel: its visibility (16),
+/// with the error image and the comparison's working set in `compare` (16).
+pub const RESULT_BYTES_PER_PIXEL: u64 = 32;
+
 impl Setup {
+    /// Refuses an image whose camera pass and `results` kept results (a render keeps one;
+    /// compare one per run and the reference's) would need more memory than this process
+    /// may use, naming the size and the estimate, before anything is rendered.
+    pub fn check_pixel_budget(&self, results: usize) -> Result<()> {
+        let (w, h) = (self.camera.width, self.camera.height);
+        let pixels = w as u64 * h as u64;
+        let per = BYTES_PER_PIXEL + RESULT_BYTES_PER_PIXEL * results as u64;
+        shadowlab::limits::check_bytes(
+            || {
+                format!(
+                    "a {w}x{h} image (--width/--height) with {results} result(s) kept: {pixels} pixels"
+                )
+            },
+            pixels.saturating_mul(per),
+        )?;
+        Ok(())
+    }
+
     /// The camera of frame `i` (the scene's path when it has one, else the still camera),
     /// with its depth range fitted to the scene.
     pub fn camera_at(&self, i: usize) -> Camera {
@@ -129,7 +165,14 @@ impl SceneArgs {
             bail!("--frames {} is outside 1..={MAX_FRAMES}", self.frames);
         }
         let params = parse_kvs(&self.scene_params, "--scene-param")?;
-        let scene = scene::load(&self.scene, &params)?;
+        let options = scene::LoadOptions {
+            camera_index: self.camera_index,
+            allow_outside_scene_dir: self.allow_outside_scene_dir,
+        };
+        let scene = scene::load_with(&self.scene, &params, &options)?;
+        for w in &scene.warnings {
+            eprintln!("warning: {w}");
+        }
         let mut camera = scene.camera.unwrap_or_else(|| {
             let mut s = scene.clone();
             s.auto_frame(false);
@@ -173,16 +216,54 @@ impl SceneArgs {
             }
             camera.scale_distance(f);
         }
+        let framed = scene.camera;
         let light = match &self.light {
             Some(l) => parse_light(l)?,
-            None => scene.light.unwrap_or(Light::Directional {
-                to_light: vec3(-0.4, 1.0, 0.3).normalize(),
-            }),
+            None => match scene.light {
+                Some(l) if !scene.auto_light => l,
+                auto => {
+                    // Chosen for the camera the shadows are seen from.
+                    let mut seen = camera;
+                    seen.fit_depth_range(&scene.bounds);
+                    seen.validate()?;
+                    let l = match (auto, framed) {
+                        (Some(l), Some(c)) if same_view(&c, &camera) => l,
+                        _ => auto_light::choose(&scene, &seen),
+                    };
+                    if !crate::progress::quiet() {
+                        if let Light::Directional { to_light: d } = l {
+                            println!(
+                                "automatic light: directional:{:.4},{:.4},{:.4} (chosen so that its shadows fall where the camera sees them; --light overrides it)",
+                                d.x, d.y, d.z
+                            );
+                        }
+                    }
+                    l
+                }
+            },
         };
-        light.validate()?;
+        light
+            .validate()
+            .with_context(|| format!("the light of {}", self.scene))?;
         let mut check = camera;
         check.fit_depth_range(&scene.bounds);
-        check.validate()?;
+        check.validate().with_context(|| {
+            let mut from = Vec::new();
+            if let Some(c) = &self.camera {
+                from.push(format!("--camera {c}"));
+            }
+            if let Some(f) = self.camera_distance {
+                from.push(format!("--camera-distance {f}"));
+            }
+            if self.width.is_some() || self.height.is_some() {
+                from.push("--width/--height".to_string());
+            }
+            if from.is_empty() {
+                format!("the camera of {}", self.scene)
+            } else {
+                format!("the camera of {} with {}", self.scene, from.join(" and "))
+            }
+        })?;
         Ok(Setup {
             scene,
             camera,
@@ -190,6 +271,11 @@ impl SceneArgs {
             frames: self.frames,
         })
     }
+}
+
+/// True when two cameras see the same view (the image size aside).
+fn same_view(a: &Camera, b: &Camera) -> bool {
+    a.eye == b.eye && a.target == b.target && a.up == b.up && a.fov_y_deg == b.fov_y_deg
 }
 
 /// `T.K=V` technique parameters of `compare`, grouped by technique.

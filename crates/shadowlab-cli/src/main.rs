@@ -6,12 +6,17 @@
 mod bench;
 mod commands;
 mod config;
+mod outputs;
 mod plots;
 mod progress;
 mod report;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+
+/// A failed allocation ends the run with a sentence and exit status 2, never an abort.
+#[global_allocator]
+static ALLOC: shadowlab::limits::GuardedAlloc = shadowlab::limits::GuardedAlloc;
 
 /// Shadow algorithms — alias-free, adaptive, sub-pixel, perspective and convolution shadow
 /// maps beside standard maps, PCF and variance maps, and the ones engines ship (cascaded,

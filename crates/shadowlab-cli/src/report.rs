@@ -242,6 +242,56 @@ pub fn write_crop(dir: &Path, stem: &str, region: &Region, panels: &[&RgbImage])
     Ok(rel)
 }
 
+/// The reference sample counts of a report: "16 samples or 1 sample (…)" when the
+/// verdicts used more than one reference.
+fn reference_samples(metrics: &Value) -> String {
+    let counts: Vec<u64> = match metrics["references"].as_array() {
+        Some(list) if !list.is_empty() => list
+            .iter()
+            .filter_map(|r| r["samples_per_pixel"].as_u64())
+            .collect(),
+        _ => metrics["reference"]["samples_per_pixel"]
+            .as_u64()
+            .into_iter()
+            .collect(),
+    };
+    let each: Vec<String> = counts
+        .iter()
+        .map(|&n| format!("{n} sample{}", if n == 1 { "" } else { "s" }))
+        .collect();
+    if each.len() > 1 {
+        format!(
+            "{} (each technique's row says which its verdict used)",
+            each.join(" or ")
+        )
+    } else {
+        each.join("")
+    }
+}
+
+/// Under a technique's name: the reference its verdict used and, for a progressive
+/// technique, how many frames it had.
+fn verdict_note(r: &Value) -> String {
+    let mut parts = Vec::new();
+    if let Some(n) = r["reference_spp"].as_u64() {
+        parts.push(format!("vs {n} spp"));
+    }
+    if let (Some(n), Some(c)) = (r["frames_run"].as_u64(), r["converged"].as_bool()) {
+        parts.push(if c {
+            format!("converged in {n} frames")
+        } else {
+            format!("{n} frames, not converged")
+        });
+    }
+    if parts.is_empty() {
+        return String::new();
+    }
+    format!(
+        "<br><span class=\"small verdict\">{}</span>",
+        esc(&parts.join(" · "))
+    )
+}
+
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -727,14 +777,14 @@ pub fn write_html(dir: &Path, metrics: &Value) -> Result<()> {
     let _ = writeln!(
         o,
         "<header><h1>shadowlab — {}</h1><p>{} triangles · {}×{} pixels · {} covered · camera pass {:.1} ms · \
-         reference: ray traced, {} sample(s) per pixel, {:.1} ms (BVH {:.1} + trace {:.1}) · {} thread(s){} · shadowlab {}</p></header>",
+         reference: ray traced, {} per pixel, {:.1} ms (BVH {:.1} + trace {:.1}) · {} thread(s){} · shadowlab {}</p></header>",
         esc(scene),
         metrics["triangles"],
         w,
         h,
         metrics["covered_pixels"],
         f(&metrics["camera_pass_ms"]),
-        reference["samples_per_pixel"],
+        esc(&reference_samples(metrics)),
         f(&reference["time_ms"]),
         f(&reference["bvh_build_ms"]),
         f(&reference["trace_ms"]),
@@ -833,9 +883,9 @@ pub fn write_html(dir: &Path, metrics: &Value) -> Result<()> {
     );
     let _ = write!(
         o,
-        "<tbody><tr class=\"reference-row\"><td class=\"text\">reference (ray traced)</td><td class=\"text small\">{} spp, {} pattern</td>\
+        "<tbody><tr class=\"reference-row\"><td class=\"text\">reference (ray traced)</td><td class=\"text small\">{}, {} pattern</td>\
          <td data-v=\"{:.6}\">{:.2}</td><td class=\"small stages\"><span class=\"kv\">BVH build {:.2}</span> <span class=\"kv\">trace {:.2}</span></td><td></td><td>0</td><td>0</td><td></td></tr></tbody><tbody class=\"runs\">",
-        reference["samples_per_pixel"],
+        esc(&reference_samples(metrics)),
         esc(reference["pattern"].as_str().unwrap_or("grid")),
         f(&reference["time_ms"]),
         f(&reference["time_ms"]),
@@ -903,11 +953,12 @@ pub fn write_html(dir: &Path, metrics: &Value) -> Result<()> {
         let cls = |v: f64, b: f64| if v <= b { " class=\"best\"" } else { "" };
         let _ = write!(
             o,
-            "<tr class=\"technique-row\" data-label=\"{}\"><td class=\"text\">{}</td><td class=\"text small params\">{}</td>\
+            "<tr class=\"technique-row\" data-label=\"{}\"><td class=\"text\">{}{}</td><td class=\"text small params\">{}</td>\
              <td data-v=\"{:.6}\"{}>{:.2}</td><td class=\"small stages\" data-v=\"{:.6}\">{}{}</td><td data-v=\"{}\">{}</td>\
              <td data-v=\"{:.8}\"{}>{:.4}%</td><td data-v=\"{:.8}\"{}>{:.5}</td><td class=\"text small counters\">{}</td></tr>",
             esc(r.label),
             esc(r.label),
+            verdict_note(r.v),
             params,
             time,
             cls(time, best_t),
@@ -1074,7 +1125,7 @@ pub fn write_html(dir: &Path, metrics: &Value) -> Result<()> {
 
     let prov = json!({
         "scene_source": metrics["scene_source"], "scene_params": metrics["scene_params"],
-        "camera": metrics["camera"], "light": metrics["light"],
+        "camera": metrics["camera"], "light": metrics["light"], "warnings": metrics["warnings"],
     });
     let _ = write!(
         o,

@@ -393,3 +393,138 @@ fn layers_behind_semi_transparent_surfaces_are_shaded_and_measured() {
         std::fs::read(&front).unwrap()
     );
 }
+
+#[test]
+fn loader_warnings_reach_stderr_stats_and_metrics() {
+    let d = tmp("warnings");
+    let edges = data("lenient/edges.obj");
+    let stats = d.join("stats.json");
+    let out = render(
+        &d,
+        &[
+            "--scene",
+            edges.to_str().unwrap(),
+            "--technique",
+            "sm",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--stats",
+            stats.to_str().unwrap(),
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    // One line per kind: short faces, `l`, `p`, statements not read.
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 4, "{err}");
+    assert!(
+        lines
+            .iter()
+            .all(|l| l.starts_with("warning: edges.obj: skipped ")),
+        "{err}"
+    );
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let said: Vec<String> = lines
+        .iter()
+        .map(|l| l.trim_start_matches("warning: ").to_string())
+        .collect();
+    assert_eq!(stats["warnings"], serde_json::json!(said));
+    let rep = d.join("report");
+    let out = bin()
+        .args([
+            "compare",
+            "--scene",
+            data("lenient/lines.gltf").to_str().unwrap(),
+        ])
+        .args([
+            "--techniques",
+            "sm,raytrace",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--out",
+        ])
+        .arg(&rep)
+        .output()
+        .unwrap();
+    let m = report_metrics(&out, &rep);
+    let w: Vec<&str> = m["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert_eq!(w.len(), 3, "{w:?}");
+    assert!(w.iter().any(|s| s.contains("LINES")), "{w:?}");
+    // A scene with nothing to say has an empty list.
+    let rep = d.join("bunny");
+    let out = bin()
+        .args(["compare", "--scene", data("bunny.obj").to_str().unwrap()])
+        .args([
+            "--techniques",
+            "sm",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--out",
+        ])
+        .arg(&rep)
+        .output()
+        .unwrap();
+    assert_eq!(
+        report_metrics(&out, &rep)["warnings"],
+        serde_json::json!([])
+    );
+}
+
+#[test]
+fn camera_index_picks_a_gltf_camera_and_is_checked() {
+    let d = tmp("camera-index");
+    let cams = data("gltf/Cameras.gltf");
+    let run = |i: &str, stats: &Path| {
+        render(
+            &d,
+            &[
+                "--scene",
+                cams.to_str().unwrap(),
+                "--technique",
+                "sm",
+                "--width",
+                "64",
+                "--height",
+                "48",
+                "--force",
+                "--camera-index",
+                i,
+                "--stats",
+                stats.to_str().unwrap(),
+            ],
+        )
+    };
+    let read = |p: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let (s0, s1) = (d.join("s0.json"), d.join("s1.json"));
+    let out = run("0", &s0);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = run("1", &s1);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (c0, c1) = (read(&s0)["camera"].clone(), read(&s1)["camera"].clone());
+    assert_ne!(c0, c1);
+    assert!((c0["fov_y_deg"].as_f64().unwrap() - 0.7f64.to_degrees()).abs() < 1e-3);
+    assert_bad_input(&run("2", &d.join("s2.json")), "has 2 cameras");
+    assert_bad_input(&run("x", &d.join("s3.json")), "--camera-index");
+}

@@ -16,10 +16,7 @@ fn run(args: &[&str]) -> std::process::Output {
 }
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!(
-        "shadowlab-contract-{}-{name}",
-        std::process::id()
-    ));
+    let d = std::env::temp_dir().join(format!("shadowlab-contract-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d

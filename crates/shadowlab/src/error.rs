@@ -10,12 +10,13 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A file could not be read.
-    #[error("cannot read {path}: {source}")]
+    #[error("{path} {reason}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// The operating system's reason.
-        source: std::io::Error,
+        /// Why, as a phrase that follows the path: "does not exist", "is a FIFO (named
+        /// pipe), not a regular file", ….
+        reason: String,
     },
     /// A scene or mesh file is malformed; `what` names the element and the problem.
     #[error("{path}: {what}")]
@@ -53,6 +54,14 @@ impl Error {
     /// A parameter error.
     pub fn param(msg: impl Into<String>) -> Self {
         Error::Param(msg.into())
+    }
+
+    /// A file that cannot be read; `reason` follows its path in the sentence.
+    pub fn io(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
+        Error::Io {
+            path: path.into(),
+            reason: reason.into(),
+        }
     }
 
     /// A format error for `path`.

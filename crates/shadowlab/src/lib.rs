@@ -38,19 +38,27 @@
 //! let shadows = technique.render(&frame).unwrap();
 //! assert_eq!(shadows.visibility.width, 64);
 //! ```
-// Unsafe code is allowed in two places only: the Embree bindings (an optional feature) and
-// the calls into functions compiled for an instruction set the processor was checked for.
+// Unsafe code is allowed in three places only: the Embree bindings (an optional feature),
+// the calls into functions compiled for an instruction set the processor was checked for,
+// and the memory limits (the C library's rlimit and the global allocator wrapper).
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod bvh;
 pub mod camera;
 pub mod compare;
 #[cfg(feature = "embree")]
 #[allow(unsafe_code)]
 pub mod embree;
 pub mod error;
+pub mod files;
+pub mod gbuffer;
 pub mod light;
+#[allow(unsafe_code)]
+pub mod limits;
 pub mod math;
+pub mod multi_light;
+pub mod points;
 pub mod raster;
 pub mod reference;
 pub mod sampling;

@@ -1,5 +1,5 @@
 //! The ground truth: ray-traced visibility through a BVH (the `obvhs` crate's compressed
-//! wide BVH, built with PLOC).
+//! wide BVH, built by [`crate::bvh`]).
 //!
 //! A shadow ray leaves each visible point towards the light; its origin is offset along
 //! the face normal by the floating-point error bound of the point (pbrt's
@@ -78,11 +78,7 @@ impl<'s> Reference<'s> {
                 }
             })
             .collect();
-        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
-            &tris,
-            obvhs::BvhBuildParams::fast_build(),
-            &mut std::time::Duration::default(),
-        );
+        let bvh = crate::bvh::build(&tris);
         Reference {
             scene,
             bvh,

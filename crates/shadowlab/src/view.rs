@@ -97,8 +97,15 @@ fn sample(
 }
 
 impl ViewSamples {
-    /// Runs the camera pass.
+    /// Runs the camera pass; panics where the memory for its buffers is not there (see
+    /// [`ViewSamples::try_render`]).
     pub fn render(scene: &Scene, camera: &Camera) -> Self {
+        Self::try_render(scene, camera).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// Runs the camera pass, or fails with a sentence when its per-pixel buffers cannot
+    /// be allocated.
+    pub fn try_render(scene: &Scene, camera: &Camera) -> crate::error::Result<Self> {
         let t0 = std::time::Instant::now();
         let (w, h) = (camera.width, camera.height);
         let clip_from_world = camera.clip_from_world();
@@ -108,17 +115,19 @@ impl ViewSamples {
             (c, c.map(|c| c.w))
         });
         let buf = raster::depth_buffer(&setups, w, h);
-        let n = (w * h) as usize;
+        let n = w as usize * h as usize;
+        let what = format!("the {w}x{h} camera pass");
+        let zeros = || crate::limits::try_filled(n, Vec3::ZERO, &what);
         let mut vs = ViewSamples {
             width: w,
             height: h,
             triangle: buf.id,
-            position: vec![Vec3::ZERO; n],
-            position_error: vec![Vec3::ZERO; n],
-            normal: vec![Vec3::ZERO; n],
-            depth: vec![f32::INFINITY; n],
-            dpdx: vec![Vec3::ZERO; n],
-            dpdy: vec![Vec3::ZERO; n],
+            position: zeros()?,
+            position_error: zeros()?,
+            normal: zeros()?,
+            depth: crate::limits::try_filled(n, f32::INFINITY, &what)?,
+            dpdx: zeros()?,
+            dpdy: zeros()?,
             camera: *camera,
             time_ms: 0.0,
         };
@@ -160,7 +169,7 @@ impl ViewSamples {
                 );
         }
         vs.time_ms = t0.elapsed().as_secs_f64() * 1e3;
-        vs
+        Ok(vs)
     }
 
     /// True when pixel `k` shows a surface.

@@ -79,6 +79,8 @@ const DATA_MESHES: &[(&str, usize)] = &[
     ("gltf/2CylinderEngine.glb", 121_496),
     ("gltf/Cameras.gltf", 2),
     ("gltf/BoxTextured.glb", 12),
+    ("lenient/edges.obj", 8),
+    ("lenient/lines.gltf", 3),
 ];
 
 #[test]
@@ -638,15 +640,16 @@ fn bad_gltf_files_give_clear_errors() {
     for (file, words) in [
         (
             "bad/index-out-of-range/IndexOutOfRange.gltf",
-            &["mesh 0", "primitive 0", "255", "out of range"][..],
+            // The index's value is not echoed: it is the file's bytes.
+            &["mesh 0", "primitive 0", "index", "out of range"][..],
         ),
         (
             "bad/index-out-of-range/AllIndicesOutOfRange.gltf",
-            &["mesh 0", "primitive 0", "65535", "out of range"],
+            &["mesh 0", "primitive 0", "index", "out of range"],
         ),
         (
             "bad/missing-bin/BoxTextured.gltf",
-            &["BoxTextured0.bin", "cannot be read"],
+            &["BoxTextured0.bin", "does not exist"],
         ),
         (
             "bad/BoxWithInfinites.glb",

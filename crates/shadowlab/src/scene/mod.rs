@@ -4,17 +4,21 @@
 //! Loaders (OBJ, PLY, glTF 2.0, the TOML scene format) and the built-in generators of the
 //! papers' test scenes live in the submodules; [`load`] picks one from a scene spec.
 
+pub mod auto_light;
 pub mod builtin;
 pub mod export;
 pub mod fence_leak;
 pub mod gltf;
+pub mod mesh;
 pub mod obj;
 pub mod ply;
 pub mod toml;
 
 use crate::camera::{Camera, CameraPath, AUTO_VIEW_DIRECTION};
 use crate::error::{Error, Result};
+use crate::files;
 use crate::light::Light;
+use crate::limits;
 use crate::math::{vec3, Aabb, Mat4, Vec3};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -22,6 +26,41 @@ use std::path::Path;
 
 /// The most triangles a scene may hold; larger scenes are refused before allocation.
 pub const MAX_TRIANGLES: usize = 50_000_000;
+
+/// Triangles [`Scene::auto_frame`] adds as the ground plane under a bare mesh; loaders
+/// count them in before they compare a file's triangles with [`MAX_TRIANGLES`].
+pub const GROUND_TRIANGLES: usize = 2;
+
+/// Bytes a run holds per scene triangle, for the estimate checked before a file's
+/// triangles are built. Measured: `compare` on 4,000,000 random triangles (scene, the ray
+/// tracer's BVH and its build scratch, the technique's light-space set-up) peaks at
+/// 1.26 GB, about 300 bytes a triangle; `render`, without the BVH, at about 80. The
+/// estimate is the larger, with the loader's decoded copy on top.
+pub const BYTES_PER_TRIANGLE: u64 = 320;
+
+/// Refuses a file that would bring `triangles` triangles (with the ground plane a bare
+/// mesh gets), naming the file, the count and the limit, before they are built: above
+/// [`MAX_TRIANGLES`], or an estimate above [`limits::memory_limit`].
+pub fn check_triangle_count(path: &Path, triangles: u64) -> Result<()> {
+    let total = triangles.saturating_add(GROUND_TRIANGLES as u64);
+    if total > MAX_TRIANGLES as u64 {
+        return Err(Error::Limit(format!(
+            "{} holds {triangles} triangles, more than the limit of {} (the scene's limit of {MAX_TRIANGLES} less the {GROUND_TRIANGLES} of the ground plane)",
+            path.display(),
+            MAX_TRIANGLES - GROUND_TRIANGLES
+        )));
+    }
+    limits::check_bytes(
+        || format!("{}: its {triangles} triangles", path.display()),
+        total.saturating_mul(BYTES_PER_TRIANGLE),
+    )
+}
+
+/// The bytes of the scene or mesh file `path`, which must be a regular file of at most
+/// `limit` bytes.
+pub(crate) fn read_input(path: &Path, limit: u64) -> Result<Vec<u8>> {
+    files::read_regular_file(path, limit).map_err(|why| Error::io(path, why))
+}
 
 /// Surface and shadow-casting properties of a group of triangles.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -84,6 +123,18 @@ pub struct Scene {
     pub camera_path: Option<CameraPath>,
     /// The scene's own light, if it has one.
     pub light: Option<Light>,
+    /// What the loader skipped or approximated, one sentence per kind (e.g. "bike.obj:
+    /// skipped 201 faces with fewer than 3 vertices"), in the order met.
+    pub warnings: Vec<String>,
+    /// True when `light` was chosen by [`Scene::auto_frame`] (see [`auto_light`]) rather
+    /// than given by the scene, so a caller that moves the camera may choose it again.
+    pub auto_light: bool,
+    /// Bumped whenever the geometry is edited in place (see [`mesh`]), so techniques that
+    /// keep state for a scene across frames know to rebuild it.
+    pub revision: u64,
+    /// One past the last triangle of each mesh added by [`Scene::from_meshes`] or
+    /// [`Scene::add_mesh`].
+    pub mesh_ends: Vec<usize>,
 }
 
 impl Scene {
@@ -174,8 +225,14 @@ impl Scene {
         self.materials.iter().any(|m| !m.is_opaque())
     }
 
-    /// Appends all triangles of `other` (materials are appended too).
+    /// Records a warning: something the loader skipped or approximated.
+    pub fn warn(&mut self, what: impl Into<String>) {
+        self.warnings.push(what.into());
+    }
+
+    /// Appends all triangles of `other` (materials and warnings are appended too).
     pub fn append(&mut self, other: &Scene) {
+        self.warnings.extend(other.warnings.iter().cloned());
         let base = self.materials.len() as u32;
         self.materials.extend(other.materials.iter().cloned());
         self.reserve(other.len());
@@ -239,7 +296,8 @@ impl Scene {
 
     /// Gives a bare mesh what it needs to be looked at, whatever its units: a ground
     /// plane under it (at its lowest point, 4× its footprint), a camera that frames it
-    /// and a directional light from above, for whichever of camera and light it lacks.
+    /// and a directional light chosen so that its shadows fall where the camera sees them
+    /// ([`auto_light::choose`]), for whichever of camera and light it lacks.
     pub fn auto_frame(&mut self, add_ground: bool) {
         let b = self.bounds;
         let size = (b.max - b.min).max_element().max(1e-6);
@@ -266,17 +324,61 @@ impl Scene {
             ));
         }
         if self.light.is_none() {
-            self.light = Some(Light::Directional {
-                to_light: vec3(-0.4, 1.0, 0.3).normalize(),
-            });
+            let camera = self.camera.expect("camera set above");
+            self.light = Some(auto_light::choose(self, &camera));
+            self.auto_light = true;
         }
     }
+}
+
+/// Choices made while loading a scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Which of the file's cameras to use: a glTF file's camera nodes in the order its
+    /// hierarchy walk meets them; other scenes have at most one (index 0).
+    pub camera_index: usize,
+    /// Let glTF buffer URIs, OBJ `mtllib` lines and TOML mesh `file` paths name files
+    /// outside the scene file's folder (by default they are refused).
+    pub allow_outside_scene_dir: bool,
 }
 
 /// Loads a scene from a spec: a built-in scene name, or a path to a `.toml` scene, an
 /// `.obj`, `.ply`, `.gltf` or `.glb` mesh. `params` are a built-in scene's parameters
 /// (an error for files). Bare meshes are auto-framed; the result is validated.
 pub fn load(spec: &str, params: &BTreeMap<String, String>) -> Result<Scene> {
+    load_with(spec, params, &LoadOptions::default())
+}
+
+/// [`load`] with [`LoadOptions`]; a camera index past the scene's cameras is an error
+/// naming how many it has.
+pub fn load_with(
+    spec: &str,
+    params: &BTreeMap<String, String>,
+    options: &LoadOptions,
+) -> Result<Scene> {
+    let s = load_spec(spec, params, options)?;
+    // The glTF loader checks the index against the file's own cameras.
+    let gltf = Path::new(spec)
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
+    let count = usize::from(s.camera.is_some());
+    if !gltf && options.camera_index > 0 && options.camera_index >= count {
+        return Err(Error::param(format!(
+            "--camera-index {} is out of range: {} has {count} camera{}",
+            options.camera_index,
+            s.name,
+            if count == 1 { " (index 0)" } else { "s" }
+        )));
+    }
+    Ok(s)
+}
+
+fn load_spec(
+    spec: &str,
+    params: &BTreeMap<String, String>,
+    options: &LoadOptions,
+) -> Result<Scene> {
     let path = Path::new(spec);
     let ext = path
         .extension()
@@ -296,11 +398,12 @@ pub fn load(spec: &str, params: &BTreeMap<String, String>) -> Result<Scene> {
             "--scene-param {k} applies to built-in scenes only, not to the file {spec}"
         )));
     }
+    let access = files::Access::for_scene(path, options.allow_outside_scene_dir);
     let mut s = match ext.as_deref() {
-        Some("obj") => obj::load(path)?,
+        Some("obj") => obj::load_with(path, &access)?,
         Some("ply") => ply::load(path)?,
-        Some("gltf" | "glb") => gltf::load(path)?,
-        Some("toml") => toml::load(path)?,
+        Some("gltf" | "glb") => gltf::load_with(path, &access, options.camera_index)?,
+        Some("toml") => toml::load_with(path, &access)?,
         _ => unreachable!("extension checked above"),
     };
     if s.name.is_empty() {
@@ -312,8 +415,30 @@ pub fn load(spec: &str, params: &BTreeMap<String, String>) -> Result<Scene> {
     if s.is_empty() {
         return Err(Error::format(path, "the file holds no triangles"));
     }
+    let extent = s.bounds.max - s.bounds.min;
+    if !(extent * 4.0).is_finite() {
+        return Err(Error::format(
+            path,
+            format!(
+                "its vertices span from {} to {}, too far apart to frame and light (scale the mesh down)",
+                s.bounds.min, s.bounds.max
+            ),
+        ));
+    }
     let bare = s.camera.is_none() && s.light.is_none() && ext.as_deref() != Some("toml");
+    let framed = s.camera.is_none();
+    // Before auto-framing: the automatic light traces rays, which needs finite geometry.
+    s.validate()?;
     s.auto_frame(bare);
+    if let (true, Some(mut c)) = (framed, s.camera) {
+        c.fit_depth_range(&s.bounds);
+        c.validate().map_err(|e| {
+            Error::format(
+                path,
+                format!("the camera framed around its extent {extent} is unusable ({e})"),
+            )
+        })?;
+    }
     s.validate()?;
     Ok(s)
 }

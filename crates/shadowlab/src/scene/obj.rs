@@ -3,10 +3,21 @@
 //! Colours come from `Kd`; opacity from `d` (dissolve) or `Tr` (= 1 − d), and an explicit
 //! RGB `Tf` (transmission filter), taken as the transmittance when `d` < 1. Missing `.mtl`
 //! files and missing textures are not errors: the mesh loads with a default material.
+//!
+//! What cannot cast a shadow is skipped, and said once per kind in [`Scene::warnings`]:
+//! faces of one or two vertices (points and edges some exporters write among the
+//! triangles), `l` and `p` statements, and statements shadowlab does not read (free-form
+//! curves and surfaces, `vp`, display attributes). Polygons of more than three vertices are
+//! triangulated as a fan. Refused: a non-finite coordinate, a face naming a vertex that
+//! does not exist, and a face of fewer than three vertices on a last line with no newline
+//! (the mark of a file cut short).
 
 use super::{Material, Scene};
 use crate::error::{Error, Result};
+use crate::files::{read_regular_file, Access, MAX_FILE_BYTES, MAX_SCENE_TEXT_BYTES};
 use crate::math::{vec3, Mat4, Vec3};
+use std::borrow::Cow;
+use std::cell::RefCell;
 use std::path::Path;
 
 const LOAD_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
@@ -16,17 +27,44 @@ const LOAD_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
     ignore_lines: true,
 };
 
-/// Loads an OBJ file.
+/// Loads an OBJ file; its `mtllib` files must lie in its folder.
 pub fn load(path: &Path) -> Result<Scene> {
-    check_faces(path)?;
-    let (models, mats) = tobj::load_obj(path, &LOAD_OPTIONS).map_err(|e| match e {
-        tobj::LoadError::OpenFileFailed => Error::Io {
-            path: path.into(),
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, "the file cannot be opened"),
-        },
-        other => Error::format(path, format!("not a valid OBJ file ({other})")),
-    })?;
-    build(path, &models, mats)
+    load_with(path, &Access::for_scene(path, false))
+}
+
+/// Loads an OBJ file whose `mtllib` files resolve as `access` allows. Material libraries
+/// that do not exist are not errors (the mesh gets the default material); one that is
+/// not a regular file, or lies outside where `access` allows, is.
+pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
+    let bytes = super::read_input(path, MAX_FILE_BYTES)?;
+    let (text, warnings) = prefilter(path, &bytes)?;
+    let triangles = check_lines(path, &bytes)?;
+    super::check_triangle_count(path, triangles)?;
+    let base = path.parent().unwrap_or(Path::new(""));
+    let refused: RefCell<Option<String>> = RefCell::new(None);
+    let loader = |mtl: &Path| {
+        let name = mtl.to_string_lossy();
+        let read = access
+            .resolve(base, &name)
+            .and_then(|full| read_regular_file(&full, MAX_SCENE_TEXT_BYTES));
+        match read {
+            Ok(text) => tobj::load_mtl_buf(&mut text.as_slice()),
+            Err(why) => {
+                if why != "does not exist" && refused.borrow().is_none() {
+                    *refused.borrow_mut() = Some(format!("its material library {name:?} {why}"));
+                }
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    };
+    let (models, mats) = tobj::load_obj_buf(&mut text.as_ref(), &LOAD_OPTIONS, loader)
+        .map_err(|e| Error::format(path, format!("not a valid OBJ file ({e})")))?;
+    if let Some(why) = refused.into_inner() {
+        return Err(Error::format(path, why));
+    }
+    let mut scene = build(path, &models, mats)?;
+    scene.warnings = warnings;
+    Ok(scene)
 }
 
 /// Loads OBJ text held in memory, with the text of its `.mtl` file if it has one (every
@@ -37,9 +75,143 @@ pub fn load_from_str(name: &str, obj: &str, mtl: Option<&str>) -> Result<Scene> 
         Some(text) => tobj::load_mtl_buf(&mut text.as_bytes()),
         None => Err(tobj::LoadError::OpenFileFailed),
     };
-    let (models, mats) = tobj::load_obj_buf(&mut obj.as_bytes(), &LOAD_OPTIONS, loader)
+    let (text, warnings) = prefilter(path, obj.as_bytes())?;
+    let (models, mats) = tobj::load_obj_buf(&mut text.as_ref(), &LOAD_OPTIONS, loader)
         .map_err(|e| Error::format(path, format!("not a valid OBJ file ({e})")))?;
-    build(path, &models, mats)
+    let mut scene = build(path, &models, mats)?;
+    scene.warnings = warnings;
+    Ok(scene)
+}
+
+/// Statements read (`v`, `f`, …) or dropped on purpose without a word: `s` (smoothing
+/// groups) only changes interpolated normals, which shadows never use.
+const KNOWN_STATEMENTS: &[&[u8]] = &[
+    b"v", b"vt", b"vn", b"f", b"o", b"g", b"s", b"mtllib", b"usemtl",
+];
+
+/// What [`prefilter`] left out of an OBJ text.
+#[derive(Default)]
+struct Skipped {
+    /// `f` lines with fewer than three vertices (edges and points written as faces).
+    short_faces: usize,
+    /// `l` (polyline) statements.
+    lines: usize,
+    /// `p` (point) statements.
+    points: usize,
+    /// Other statements shadowlab does not read, by keyword.
+    unknown: std::collections::BTreeMap<String, usize>,
+}
+
+/// The OBJ text without what cannot cast a shadow — faces of fewer than 3 vertices, `l`
+/// and `p` statements (`tobj` would make triangles of a 3-vertex `l`) — and one warning
+/// per kind of thing left out, naming the file. Fails on a face of fewer than 3 vertices
+/// on an unterminated last line: that is how a file cut short in its face list ends.
+fn prefilter<'a>(path: &Path, bytes: &'a [u8]) -> Result<(Cow<'a, [u8]>, Vec<String>)> {
+    let mut skipped = Skipped::default();
+    let mut kept: Vec<u8> = Vec::new();
+    // Bytes up to `copied` are kept verbatim; filtering starts at the first dropped line.
+    let mut copied = 0;
+    let mut start = 0;
+    for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let end = start + line.len();
+        let last = end == bytes.len();
+        let mut tokens = line
+            .split(|b| b.is_ascii_whitespace())
+            .filter(|t| !t.is_empty());
+        let keyword = tokens.next();
+        let drop = match keyword {
+            Some(b"f") => {
+                let k = tokens.count();
+                if k < 3 && last {
+                    return Err(Error::format(
+                        path,
+                        format!(
+                            "line {}: a face with {k} vertices, fewer than 3, on a last line without a newline (is the file truncated?)",
+                            n + 1
+                        ),
+                    ));
+                }
+                skipped.short_faces += usize::from(k < 3);
+                k < 3
+            }
+            Some(b"l") => {
+                skipped.lines += 1;
+                true
+            }
+            Some(b"p") => {
+                skipped.points += 1;
+                true
+            }
+            Some(k) if k.starts_with(b"#") || KNOWN_STATEMENTS.contains(&k) => false,
+            Some(k) => {
+                let name = String::from_utf8_lossy(&k[..k.len().min(32)]).into_owned();
+                *skipped.unknown.entry(name).or_default() += 1;
+                false
+            }
+            None => false,
+        };
+        if drop {
+            kept.extend_from_slice(&bytes[copied..start]);
+            copied = (end + 1).min(bytes.len());
+        }
+        start = end + 1;
+    }
+    let text = if copied == 0 {
+        Cow::Borrowed(bytes)
+    } else {
+        kept.extend_from_slice(&bytes[copied..]);
+        Cow::Owned(kept)
+    };
+    Ok((text, skipped.warnings(path)))
+}
+
+impl Skipped {
+    /// One sentence per kind of thing skipped.
+    fn warnings(&self, path: &Path) -> Vec<String> {
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let mut out = Vec::new();
+        let mut say = |n: usize, one: &str, many: &str, why: &str| {
+            if n > 0 {
+                let what = if n == 1 { one } else { many };
+                out.push(format!("{name}: skipped {n} {what} ({why})"));
+            }
+        };
+        say(
+            self.short_faces,
+            "face with fewer than 3 vertices",
+            "faces with fewer than 3 vertices",
+            "edges and points cast no shadow",
+        );
+        say(
+            self.lines,
+            "line element (`l`)",
+            "line elements (`l`)",
+            "lines cast no shadow",
+        );
+        say(
+            self.points,
+            "point element (`p`)",
+            "point elements (`p`)",
+            "points cast no shadow",
+        );
+        if !self.unknown.is_empty() {
+            let n: usize = self.unknown.values().sum();
+            let kinds: Vec<String> = self
+                .unknown
+                .iter()
+                .map(|(k, c)| format!("{k:?} ×{c}"))
+                .collect();
+            out.push(format!(
+                "{name}: skipped {n} statement{} shadowlab does not read ({})",
+                if n == 1 { "" } else { "s" },
+                kinds.join(", ")
+            ));
+        }
+        out
+    }
 }
 
 /// Converts tobj's models and materials into a scene; `path` names the source in errors.
@@ -100,31 +272,71 @@ fn build(
     Ok(scene)
 }
 
-/// Fails on a face line with fewer than three vertices, which `tobj` drops without a
-/// word: it is what a file cut short in its face list ends with.
-fn check_faces(path: &Path) -> Result<()> {
-    let bytes = std::fs::read(path).map_err(|e| Error::Io {
-        path: path.into(),
-        source: e,
-    })?;
+/// Checks the lines `tobj` would reject or silently drop, so the error can name the
+/// line: a face with fewer than three vertices (what a file cut short ends with), a
+/// vertex whose coordinates are not numbers or not finite, a face index that is not a
+/// number or names a vertex not defined before it. Returns the number of triangles the
+/// faces make, to be checked before any is built.
+fn check_lines(path: &Path, bytes: &[u8]) -> Result<u64> {
+    let mut vertices: u64 = 0;
+    let mut triangles: u64 = 0;
     for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let at = |what: String| Error::format(path, format!("line {}: {what}", n + 1));
         let mut tokens = line
             .split(|b| b.is_ascii_whitespace())
             .filter(|t| !t.is_empty());
-        if tokens.next() == Some(b"f".as_slice()) {
-            let k = tokens.count();
-            if k < 3 {
-                return Err(Error::format(
-                    path,
-                    format!(
-                        "line {}: a face with {k} vertices, fewer than 3 (is the file truncated?)",
-                        n + 1
-                    ),
-                ));
+        match tokens.next() {
+            Some(b"v") => {
+                vertices += 1;
+                for (axis, t) in tokens.take(3).enumerate() {
+                    let v = std::str::from_utf8(t)
+                        .ok()
+                        .and_then(|t| t.parse::<f32>().ok());
+                    match v {
+                        Some(v) if v.is_finite() => {}
+                        Some(_) => {
+                            return Err(at(format!(
+                                "vertex {vertices} has a non-finite coordinate {}",
+                                ["x", "y", "z"][axis]
+                            )))
+                        }
+                        None => {
+                            return Err(at(format!(
+                                "vertex {vertices}: coordinate {} is not a number",
+                                ["x", "y", "z"][axis]
+                            )))
+                        }
+                    }
+                }
             }
+            Some(b"f") => {
+                let mut k = 0u64;
+                for t in tokens {
+                    k += 1;
+                    let first = t.split(|&b| b == b'/').next().unwrap_or_default();
+                    let i = std::str::from_utf8(first)
+                        .ok()
+                        .and_then(|s| s.parse::<i64>().ok());
+                    let ok = match i {
+                        Some(i) if i > 0 => i as u64 <= vertices,
+                        Some(i) if i < 0 => i.unsigned_abs() <= vertices,
+                        _ => false,
+                    };
+                    if !ok {
+                        let shown = String::from_utf8_lossy(first);
+                        let shown: String = shown.chars().take(24).collect();
+                        return Err(at(format!(
+                            "face vertex {k} ({shown:?}) does not name one of the {vertices} vertices defined before it"
+                        )));
+                    }
+                }
+                // Shorter faces are skipped (see `prefilter`), cut-short files refused there.
+                triangles += k.saturating_sub(2);
+            }
+            _ => {}
         }
     }
-    Ok(())
+    Ok(triangles)
 }
 
 fn convert(m: &tobj::Material) -> Material {

@@ -14,10 +14,10 @@
 
 use super::{Material, Scene};
 use crate::error::{Error, Result};
+use crate::files::MAX_FILE_BYTES;
 use crate::math::{vec3, Mat4};
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{Header, Property, PropertyAccess, PropertyAccessResult, PropertyType};
-use std::io::BufReader;
 use std::path::Path;
 
 /// Names the face element's index list may carry.
@@ -78,13 +78,10 @@ impl PropertyAccess for Element {
 
 /// Loads a PLY file.
 pub fn load(path: &Path) -> Result<Scene> {
-    let file = std::fs::File::open(path).map_err(|e| Error::Io {
-        path: path.into(),
-        source: e,
-    })?;
+    let bytes = super::read_input(path, MAX_FILE_BYTES)?;
     let fmt = |what: String| Error::format(path, what);
     let parser = Parser::<Element>::new();
-    let mut reader = Reader::new(BufReader::new(file));
+    let mut reader = Reader::new(bytes.as_slice());
     let header = parser.read_header(&mut reader).map_err(|e| {
         let msg = e.to_string();
         let problem = if e.kind() == std::io::ErrorKind::UnexpectedEof {
@@ -98,6 +95,7 @@ pub fn load(path: &Path) -> Result<Scene> {
         fmt(format!("the PLY header is invalid: {problem}"))
     })?;
     check_header(&header).map_err(fmt)?;
+    check_counts(&header, bytes.len() as u64).map_err(fmt)?;
     // The parser counts one line per element in binary bodies as in ASCII ones, so a
     // line number maps back to the element at fault.
     let first_body_line = reader.line().max(1);
@@ -127,7 +125,12 @@ pub fn load(path: &Path) -> Result<Scene> {
         }
         positions.push(p);
     }
-    let mut tris: Vec<[u32; 3]> = Vec::with_capacity(faces.len());
+    let triangles: u64 = faces
+        .iter()
+        .map(|f| f.indices.len().saturating_sub(2) as u64)
+        .sum();
+    super::check_triangle_count(path, triangles)?;
+    let mut tris: Vec<[u32; 3]> = Vec::with_capacity(triangles as usize);
     for (f, face) in faces.iter().enumerate() {
         for &i in &face.indices {
             if i < 0 || i as u64 >= positions.len() as u64 {
@@ -141,13 +144,6 @@ pub fn load(path: &Path) -> Result<Scene> {
         let idx = &face.indices;
         for k in 1..idx.len().saturating_sub(1) {
             tris.push([idx[0] as u32, idx[k] as u32, idx[k + 1] as u32]);
-        }
-        if tris.len() > super::MAX_TRIANGLES {
-            return Err(Error::Limit(format!(
-                "{} holds more than {} triangles",
-                path.display(),
-                super::MAX_TRIANGLES
-            )));
         }
     }
     let name = path
@@ -195,6 +191,52 @@ fn check_header(header: &Header) -> std::result::Result<(), String> {
             list.name
         )),
         PropertyType::List(..) => Ok(()),
+    }
+}
+
+/// Fails when the header's version is not 1.0, the only PLY version there is, or when its
+/// element counts cannot fit in a body of `file_bytes` bytes (each element takes at least
+/// one byte a property in binary and two, a value and a separator, in ASCII), so a lying
+/// count is refused before anything is read.
+fn check_counts(header: &Header, file_bytes: u64) -> std::result::Result<(), String> {
+    let v = &header.version;
+    if (v.major, v.minor) != (1, 0) {
+        return Err(format!(
+            "the header declares PLY format version {}.{}; only 1.0 exists",
+            v.major, v.minor
+        ));
+    }
+    let ascii = matches!(header.encoding, ply_rs_bw::ply::Encoding::Ascii);
+    let mut need: u64 = 0;
+    for (name, def) in &header.elements {
+        let per: u64 = def
+            .properties
+            .values()
+            .map(|p| match (&p.data_type, ascii) {
+                (_, true) => 2,
+                (PropertyType::Scalar(t), false) => scalar_size(t),
+                (PropertyType::List(t, _), false) => scalar_size(t),
+            })
+            .sum();
+        need = need.saturating_add((def.count as u64).saturating_mul(per));
+        if need > file_bytes {
+            return Err(format!(
+                "the header declares {} `{name}` elements, more than the file's {file_bytes} bytes can hold",
+                def.count
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Bytes of one binary PLY scalar.
+fn scalar_size(t: &ply_rs_bw::ply::ScalarType) -> u64 {
+    use ply_rs_bw::ply::ScalarType as S;
+    match t {
+        S::Char | S::UChar => 1,
+        S::Short | S::UShort => 2,
+        S::Int | S::UInt | S::Float => 4,
+        S::Double => 8,
     }
 }
 

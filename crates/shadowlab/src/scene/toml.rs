@@ -77,6 +77,7 @@
 use super::{Material, Scene};
 use crate::camera::{Camera, CameraKey, CameraPath};
 use crate::error::{Error, Result};
+use crate::files::{Access, MAX_SCENE_TEXT_BYTES};
 use crate::light::Light;
 use crate::math::{vec3, Mat4, Vec3};
 use glam::Quat;
@@ -88,6 +89,32 @@ use std::path::Path;
 pub const DEFAULT_SPHERE_SEGMENTS: u32 = 32;
 /// The most segments around a generated sphere (its triangle count grows with the square).
 pub const MAX_SPHERE_SEGMENTS: u32 = 2048;
+
+/// The most key frames a camera path may have.
+pub const MAX_KEY_FRAMES: usize = 100_000;
+
+/// Three numbers, exactly: a longer or shorter array is an error, not truncated.
+#[derive(Clone, Copy)]
+struct V3([f32; 3]);
+
+impl<'de> Deserialize<'de> for V3 {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let v = Vec::<f32>::deserialize(d)?;
+        match v[..] {
+            [x, y, z] => Ok(V3([x, y, z])),
+            _ => Err(serde::de::Error::custom(format!(
+                "expected 3 numbers [x, y, z], found {}",
+                v.len()
+            ))),
+        }
+    }
+}
+
+impl From<V3> for [f32; 3] {
+    fn from(v: V3) -> Self {
+        v.0
+    }
+}
 
 /// The whole file.
 #[derive(Deserialize)]
@@ -103,9 +130,9 @@ struct SceneFile {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CameraSpec {
-    eye: [f32; 3],
-    target: [f32; 3],
-    up: Option<[f32; 3]>,
+    eye: V3,
+    target: V3,
+    up: Option<V3>,
     fov_y_deg: Option<f32>,
     width: Option<u32>,
     height: Option<u32>,
@@ -117,8 +144,8 @@ struct CameraSpec {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct KeySpec {
-    eye: [f32; 3],
-    target: [f32; 3],
+    eye: V3,
+    target: V3,
 }
 
 #[derive(Deserialize, Clone, Copy, PartialEq, Eq)]
@@ -133,10 +160,10 @@ enum LightKind {
 #[serde(deny_unknown_fields)]
 struct LightSpec {
     kind: LightKind,
-    direction: Option<[f32; 3]>,
-    to_light: Option<[f32; 3]>,
-    position: Option<[f32; 3]>,
-    target: Option<[f32; 3]>,
+    direction: Option<V3>,
+    to_light: Option<V3>,
+    position: Option<V3>,
+    target: Option<V3>,
     fov_deg: Option<f32>,
 }
 
@@ -144,7 +171,7 @@ struct LightSpec {
 #[serde(untagged)]
 enum Scale {
     Uniform(f32),
-    PerAxis([f32; 3]),
+    PerAxis(V3),
 }
 
 #[derive(Deserialize)]
@@ -154,23 +181,31 @@ struct MeshSpec {
     file: Option<String>,
     generator: Option<String>,
     params: Option<toml::Table>,
-    translate: Option<[f32; 3]>,
-    rotate_deg: Option<[f32; 3]>,
-    rotate_axis: Option<[f32; 3]>,
+    translate: Option<V3>,
+    rotate_deg: Option<V3>,
+    rotate_axis: Option<V3>,
     rotate_angle_deg: Option<f32>,
     scale: Option<Scale>,
-    color: Option<[f32; 3]>,
-    transmittance: Option<[f32; 3]>,
+    color: Option<V3>,
+    transmittance: Option<V3>,
     opacity: Option<f32>,
 }
 
-/// Loads a TOML scene file.
+/// Loads a TOML scene file; its mesh files must lie in its folder.
 pub fn load(path: &Path) -> Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-        path: path.into(),
-        source: e,
-    })?;
+    load_with(path, &Access::for_scene(path, false))
+}
+
+/// Loads a TOML scene file whose mesh `file` paths resolve as `access` allows.
+pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
+    let bytes = super::read_input(path, MAX_SCENE_TEXT_BYTES)?;
     let fmt = |what: String| Error::format(path, what);
+    let text = String::from_utf8(bytes).map_err(|e| {
+        fmt(format!(
+            "it is not UTF-8 text (byte {} is invalid)",
+            e.utf8_error().valid_up_to()
+        ))
+    })?;
     let file: SceneFile = ::toml::from_str(&text).map_err(|e| {
         let at = e.span().map(|s| {
             let before = &text[..s.start.min(text.len())];
@@ -192,14 +227,9 @@ pub fn load(path: &Path) -> Result<Scene> {
     let mut scene = Scene::new(name);
     for (i, spec) in file.mesh.iter().enumerate() {
         let label = format!("[[mesh]] {}", i + 1);
-        let part = build_mesh(base, spec).map_err(|what| fmt(format!("{label}: {what}")))?;
-        if scene.len() + part.len() > super::MAX_TRIANGLES {
-            return Err(Error::Limit(format!(
-                "{}: the meshes hold more than {} triangles",
-                path.display(),
-                super::MAX_TRIANGLES
-            )));
-        }
+        let part =
+            build_mesh(base, access, spec).map_err(|what| fmt(format!("{label}: {what}")))?;
+        super::check_triangle_count(path, (scene.len() + part.len()) as u64)?;
         scene.append(&part);
     }
     if let Some(c) = &file.camera {
@@ -216,8 +246,8 @@ pub fn load(path: &Path) -> Result<Scene> {
 
 type Msg<T> = std::result::Result<T, String>;
 
-fn finite3(v: [f32; 3], key: &str) -> Msg<Vec3> {
-    let v = Vec3::from(v);
+fn finite3(v: impl Into<[f32; 3]>, key: &str) -> Msg<Vec3> {
+    let v = Vec3::from(v.into());
     if v.is_finite() {
         Ok(v)
     } else {
@@ -225,7 +255,7 @@ fn finite3(v: [f32; 3], key: &str) -> Msg<Vec3> {
     }
 }
 
-fn unit_range3(v: [f32; 3], key: &str) -> Msg<Vec3> {
+fn unit_range3(v: V3, key: &str) -> Msg<Vec3> {
     let v = finite3(v, key)?;
     if v.min_element() < 0.0 || v.max_element() > 1.0 {
         return Err(format!("`{key}` = {v} is outside [0, 1]"));
@@ -234,7 +264,7 @@ fn unit_range3(v: [f32; 3], key: &str) -> Msg<Vec3> {
 }
 
 /// One `[[mesh]]` entry: its triangles in world space with their materials.
-fn build_mesh(base: &Path, spec: &MeshSpec) -> Msg<Scene> {
+fn build_mesh(base: &Path, access: &Access, spec: &MeshSpec) -> Msg<Scene> {
     let mut part = match (&spec.file, &spec.generator) {
         (Some(_), Some(_)) => return Err("give either `file` or `generator`, not both".into()),
         (None, None) => return Err("give a `file` or a `generator`".into()),
@@ -242,7 +272,7 @@ fn build_mesh(base: &Path, spec: &MeshSpec) -> Msg<Scene> {
             if spec.params.is_some() {
                 return Err("`params` applies to generators only, not to files".into());
             }
-            load_file(base, f)?
+            load_file(base, access, f)?
         }
         (None, Some(g)) => generate(g, spec.params.as_ref(), spec.name.as_deref().unwrap_or(g))?,
     };
@@ -292,12 +322,23 @@ fn build_mesh(base: &Path, spec: &MeshSpec) -> Msg<Scene> {
     Ok(part)
 }
 
-/// Loads a mesh file named relative to the scene file; its camera and light are dropped.
-fn load_file(base: &Path, file: &str) -> Msg<Scene> {
-    let full = base.join(file);
-    if !full.is_file() {
+/// Loads a mesh file named relative to the scene file (inside its folder unless `access`
+/// allows more); its camera and light are dropped.
+fn load_file(base: &Path, access: &Access, file: &str) -> Msg<Scene> {
+    let shown: String = file.chars().take(120).collect();
+    let full = access
+        .resolve(base, file)
+        .map_err(|why| format!("the mesh file {shown:?} {why}"))?;
+    let meta = std::fs::metadata(&full).map_err(|e| {
+        format!(
+            "the mesh file {shown:?} ({}) {}",
+            full.display(),
+            crate::files::io_reason(&e)
+        )
+    })?;
+    if let Some(kind) = crate::files::special_kind(&meta.file_type()) {
         return Err(format!(
-            "the mesh file {file:?} ({}) does not exist",
+            "the mesh file {shown:?} ({}) is {kind}, not a regular file",
             full.display()
         ));
     }
@@ -307,9 +348,9 @@ fn load_file(base: &Path, file: &str) -> Msg<Scene> {
         .map(|e| e.to_ascii_lowercase())
         .unwrap_or_default();
     let loaded = match ext.as_str() {
-        "obj" => super::obj::load(&full),
+        "obj" => super::obj::load_with(&full, access),
         "ply" => super::ply::load(&full),
-        "gltf" | "glb" => super::gltf::load(&full),
+        "gltf" | "glb" => super::gltf::load_with(&full, access, 0),
         "toml" => {
             return Err(format!(
                 "{file:?}: a scene file cannot include another scene file"
@@ -333,7 +374,7 @@ fn transform(spec: &MeshSpec) -> Msg<Mat4> {
     let scale = match &spec.scale {
         None => Vec3::ONE,
         Some(Scale::Uniform(s)) => Vec3::splat(*s),
-        Some(Scale::PerAxis(v)) => Vec3::from(*v),
+        Some(Scale::PerAxis(v)) => Vec3::from(v.0),
     };
     if !scale.is_finite() || scale.abs().min_element() == 0.0 {
         return Err(format!(
@@ -366,7 +407,7 @@ fn transform(spec: &MeshSpec) -> Msg<Mat4> {
         }
         (None, None, None) => Quat::IDENTITY,
     };
-    let translate = finite3(spec.translate.unwrap_or([0.0; 3]), "translate")?;
+    let translate = finite3(spec.translate.unwrap_or(V3([0.0; 3])), "translate")?;
     Ok(Mat4::from_scale_rotation_translation(
         scale, rotation, translate,
     ))
@@ -527,6 +568,12 @@ fn build_camera(c: &CameraSpec, scene: &Scene) -> Msg<(Camera, Option<CameraPath
     let path = match &c.path {
         None => None,
         Some(keys) if keys.is_empty() => return Err("`path` has no key frames".into()),
+        Some(keys) if keys.len() > MAX_KEY_FRAMES => {
+            return Err(format!(
+                "`path` has {} key frames, more than the limit of {MAX_KEY_FRAMES}",
+                keys.len()
+            ))
+        }
         Some(keys) => {
             let mut out = Vec::with_capacity(keys.len());
             for (i, k) in keys.iter().enumerate() {

@@ -22,8 +22,9 @@
 //!    is *resolution-mismatched* when it covers fewer than `oversampling²` texels, and it
 //!    *straddles a depth discontinuity* when the 2×2 texels whose centres surround it do
 //!    not agree on its shadow test. The benefit of a cell is the number of such pixels in
-//!    it; the cost of a new node is `a·N + b` for its `N` texels, with `a` and `b`
-//!    calibrated at start-up by timing tile renders of the scene on this machine.
+//!    it; the cost of a new node is `a·N + b` for its `N` texels, with `a` and `b` fixed
+//!    nominal units by default (so the result does not depend on the machine), or with
+//!    `auto` calibrated at start-up by timing tile renders of the scene on this machine.
 //! 3. **Refinement** (Sections 3.1, 3.2): cells are taken by decreasing benefit/cost while
 //!    the predicted time fits `time-budget-ms` and at most `max-new-nodes` are made. When
 //!    a node would exceed `budget-mb`, a leaf not used in the last frame is evicted, least
@@ -46,10 +47,14 @@
 //! - A child node covers exactly one cell of its parent with `cells` times its texel
 //!   density; the texel centres of every level coincide with those of a flat map of the
 //!   level's effective resolution.
-//! - With `time-budget-ms=none` (or fixed `cost-per-texel-ns` and `cost-per-tile-ms`) the
-//!   result is a function of the parameters and the frame sequence alone, bit-identical
-//!   for any thread count: the analysis and the look-ups are reduced in pixel order, and
-//!   tiles go through the deterministic rasterizer.
+//! - With the default cost terms (fixed `cost-per-texel-ns` and `cost-per-tile-ms`, in
+//!   which the time budget is counted) or `time-budget-ms=none`, the result is a function
+//!   of the parameters and the frame sequence alone, bit-identical for any thread count
+//!   and across runs: the analysis and the look-ups are reduced in pixel order, and tiles
+//!   go through the deterministic rasterizer. Only `auto` cost terms measure the machine.
+//! - A still view converges: once a whole analysis period makes and evicts no node, every
+//!   later frame repeats the last ([`ShadowTechnique::converged`]); the command line runs a
+//!   still view until then (or a cap) and reports the frames it took.
 //!
 //! # Departures from the paper
 //! - The paper estimates projected pixel areas with a mip-mapped texture on graphics
@@ -60,7 +65,7 @@
 //!   no shadow answer there gains nothing from refinement.
 //! - With fixed-resolution nodes the paper's `N_required` is always the node's own texel
 //!   count, so every candidate costs the same and the ranking reduces to benefit; the
-//!   calibrated cost model decides how many nodes fit in the time budget. The budget is
+//!   cost model decides how many nodes fit in the time budget. The budget is
 //!   spent against predicted costs, and the chosen tiles are then rendered together in
 //!   parallel, rather than one by one until a clock runs out.
 //! - Up to `passes` refinement passes per frame (the paper makes one): after a pass, the
@@ -87,8 +92,8 @@
 //! borders, so a boundary that runs along a tile border refines one level later; the depth
 //! bias persists at polygon boundaries where the id test fails (as the paper notes);
 //! grazing receivers (tiny light-space footprints) draw refinement down to the deepest
-//! level; and with a time budget the number of nodes made per frame depends on the
-//! machine's speed. A view that moves faster than refinement converges shows the coarser
+//! level; and with `auto` cost terms the number of nodes made per frame depends on the
+//! machine's speed and load. A view that moves faster than refinement converges shows the coarser
 //! levels' edges for a few frames.
 
 use super::shadow_map::{
@@ -117,8 +122,17 @@ pub const DEFAULT_CELLS: u32 = 4;
 pub const DEFAULT_BUDGET_MB: f64 = 16.0;
 /// Default share of eye pixels analysed per frame (the paper's one eighth).
 pub const DEFAULT_ANALYSIS_FRACTION: f64 = 0.125;
-/// Default per-frame time budget for new nodes, in predicted milliseconds.
+/// Default per-frame budget for new nodes, in the cost model's (nominal) milliseconds.
 pub const DEFAULT_TIME_BUDGET_MS: f64 = 40.0;
+/// Default cost of a new tile per texel in the cost model (`a`), in nominal nanoseconds:
+/// a fixed unit, not a measurement, so that the refinement budget (`time-budget-ms`) buys
+/// the same nodes on any machine and under any load and a frame's result depends on its
+/// inputs alone. The value is about what a 32² tile costs per texel on a 2-core machine;
+/// `cost-per-texel-ns=auto` measures this machine instead (and gives up determinism).
+pub const DEFAULT_COST_PER_TEXEL_NS: f64 = 50.0;
+/// Default fixed cost of a new tile in the cost model (`b`), in nominal milliseconds (see
+/// [`DEFAULT_COST_PER_TEXEL_NS`]); `cost-per-tile-ms=auto` measures it.
+pub const DEFAULT_COST_PER_TILE_MS: f64 = 0.2;
 /// Default cap on new nodes per frame.
 pub const DEFAULT_MAX_NEW_NODES: u32 = 1024;
 /// Default number of refinement passes per frame (the paper makes one): each further pass
@@ -175,8 +189,8 @@ impl Default for Params {
             oversampling: DEFAULT_OVERSAMPLING,
             bias: DEFAULT_CONSTANT_BIAS,
             slope_bias: DEFAULT_SLOPE_BIAS,
-            cost_per_texel_ns: None,
-            cost_per_tile_ms: None,
+            cost_per_texel_ns: Some(DEFAULT_COST_PER_TEXEL_NS),
+            cost_per_tile_ms: Some(DEFAULT_COST_PER_TILE_MS),
         }
     }
 }
@@ -252,6 +266,7 @@ fn power_of_two(key: &str, value: &str, lo: u32, hi: u32) -> Result<u32> {
 struct Fingerprint {
     name: String,
     triangles: usize,
+    revision: u64,
     bounds: Aabb,
     light: Light,
 }
@@ -261,6 +276,7 @@ impl Fingerprint {
         Fingerprint {
             name: frame.scene.name.clone(),
             triangles: frame.scene.len(),
+            revision: frame.scene.revision,
             bounds: frame.scene.bounds,
             light: *frame.light,
         }
@@ -1231,13 +1247,14 @@ fn calibrate(scene: &Scene, tree: &Tree) -> CostModel {
 ///   refinement factor per level.
 /// - `budget-mb` (16): MiB the tree may hold.
 /// - `analysis-fraction` (0.125): share of pixels analysed per frame, rounded to `1/n`.
-/// - `time-budget-ms` (40, or `none`): predicted milliseconds of new tiles per frame.
+/// - `time-budget-ms` (40, or `none`): predicted milliseconds of new tiles per frame, in
+///   the cost model's units (nominal milliseconds unless the cost terms are `auto`).
 /// - `max-new-nodes` (1024): new nodes per frame at most.
 /// - `passes` (4): refinement passes per frame (1 is the paper's).
 /// - `oversampling` (16): texels wanted across an eye pixel's footprint, per axis.
 /// - `bias`, `slope-bias` (0.5, 1): depth bias in texels of the leaf, as for `sm`.
-/// - `cost-per-texel-ns`, `cost-per-tile-ms` (`auto`): the cost model's `a` and `b`,
-///   measured at start-up unless given.
+/// - `cost-per-texel-ns`, `cost-per-tile-ms` (50 and 0.2, or `auto`): the cost model's
+///   `a` and `b` in nominal units; `auto` measures them on this machine at start-up.
 #[derive(Debug, Default)]
 pub struct Adaptive {
     params: Params,
@@ -1245,6 +1262,10 @@ pub struct Adaptive {
     cost: Option<CostModel>,
     /// Frames rendered so far (the clock of the LRU stamps).
     frame: u64,
+    /// Frames in a row, up to the last, that made and evicted no node.
+    quiet_frames: u32,
+    /// Frames in one analysis period (every pixel is analysed once per period).
+    period: u32,
 }
 
 impl Adaptive {
@@ -1257,6 +1278,7 @@ impl Adaptive {
     pub fn reset(&mut self) {
         self.tree = None;
         self.cost = None;
+        self.quiet_frames = 0;
     }
 
     fn cost_model(&mut self, scene: &Scene) -> CostModel {
@@ -1429,6 +1451,12 @@ impl ShadowTechnique for Adaptive {
         Ok(())
     }
 
+    /// Converged once a whole analysis period (every pixel analysed once) has passed
+    /// without a node made or evicted: another frame of the same view would repeat the last.
+    fn converged(&self) -> Option<bool> {
+        Some(self.tree.is_some() && self.quiet_frames >= self.period.max(1))
+    }
+
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
         let p = self.params.clone();
         let views = light_views(
@@ -1449,6 +1477,7 @@ impl ShadowTechnique for Adaptive {
         {
             self.tree = Some(Tree::new(fingerprint, views, &p));
             self.cost = None;
+            self.quiet_frames = 0;
         }
         {
             let tree = self.tree.as_mut().expect("tree made above");
@@ -1527,6 +1556,12 @@ impl ShadowTechnique for Adaptive {
         stats.stages_ms.push(("analysis".into(), analysis_ms));
         stats.stages_ms.push(("refine".into(), refine_ms));
         let (made, evicted, predicted_ms) = (budget.made, budget.evicted, budget.spent_ms);
+        self.period = period as u32;
+        self.quiet_frames = if made == 0 && evicted == 0 {
+            self.quiet_frames + 1
+        } else {
+            0
+        };
 
         let (value, used) = stats.stage("lookup", || tree.lookup(frame, &p));
         let mut used_finest = 0f64;
@@ -1698,6 +1733,7 @@ mod tests {
         let fp = Fingerprint {
             name: String::new(),
             triangles: scene.len(),
+            revision: scene.revision,
             bounds: scene.bounds,
             light,
         };

@@ -930,7 +930,10 @@ pub fn check_map_size(
             MAX_FILTERED_MAP_BYTES >> 20
         )));
     }
-    Ok(())
+    crate::limits::check_bytes(
+        || format!("{technique}: {views} filtered map(s) of {side}² texels × {channels} channels"),
+        total,
+    )
 }
 
 /// The depth interval a map's texels span, for normalizing linear depths into `[0, span]`.

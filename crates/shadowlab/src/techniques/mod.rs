@@ -179,6 +179,13 @@ pub trait ShadowTechnique: Send {
     fn set_param(&mut self, key: &str, value: &str) -> Result<()>;
     /// Computes the shadow term of a frame.
     fn render(&mut self, frame: &Frame) -> Result<Shadows>;
+    /// For a progressive technique (one that refines its result over the frames of a still
+    /// view): `Some(true)` once another frame of the same view would change nothing,
+    /// `Some(false)` while it is still refining. `None` for techniques that are done in one
+    /// frame.
+    fn converged(&self) -> Option<bool> {
+        None
+    }
 }
 
 /// Every technique name, in the order reports list them.

@@ -21,6 +21,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::light::{cube_face, light_views, Light, LightView};
+use crate::limits;
 use crate::math::Vec3;
 use crate::raster::{self, DepthBuffer, MAX_RASTER_SIDE};
 use crate::scene::Scene;
@@ -83,24 +84,32 @@ pub fn check_resolution(technique: &str, res: u32) -> Result<u32> {
     Ok(res)
 }
 
-/// Bytes the light-space maps of one render may take together (a depth and a triangle id,
-/// 8 bytes a texel), refused above this before anything is allocated: one 16384² map or a
-/// cube of six 8192² faces fits, while a 32768² map (8 GiB) or a cube of 16384² faces
-/// (12 GiB) would exhaust the memory of most machines.
+/// Bytes the light-space maps of one render may take together, at most: one 16384² map
+/// or a cube of six 8192² faces, while a 32768² map or a cube of 16384² faces would
+/// exhaust the memory of most machines. Below this, [`limits::memory_limit`] decides.
 pub const MAX_LIGHT_MAP_BYTES: u64 = 4 << 30;
 
+/// Bytes a light-map texel takes while the map is rasterized: a depth and a triangle id
+/// (8) in the rasterizer's tiles and again in the assembled map.
+pub const LIGHT_MAP_BYTES_PER_TEXEL: u64 = 16;
+
 /// Refuses `views` light maps of `res²` texels whose depth and id buffers would exceed
-/// [`MAX_LIGHT_MAP_BYTES`], naming the technique's resolution and the limit.
+/// [`MAX_LIGHT_MAP_BYTES`] or the memory this process may use ([`limits::check_bytes`]),
+/// naming the technique's resolution, the estimate and the limit, before anything is
+/// allocated.
 pub fn check_light_map_size(technique: &str, views: usize, res: u32) -> Result<()> {
-    let bytes = views as u64 * (res as u64).pow(2) * 8;
-    if bytes > MAX_LIGHT_MAP_BYTES {
+    let texels = views as u64 * (res as u64).pow(2);
+    if texels * 8 > MAX_LIGHT_MAP_BYTES {
         return Err(Error::Limit(format!(
             "{technique}.resolution = {res}: {views} light map(s) of {res}² texels would take {} MiB, more than the limit of {} MiB; set a smaller --param resolution",
-            bytes >> 20,
+            (texels * 8) >> 20,
             MAX_LIGHT_MAP_BYTES >> 20
         )));
     }
-    Ok(())
+    limits::check_bytes(
+        || format!("{technique}.resolution = {res}: {views} light map(s) of {res}² texels"),
+        texels * LIGHT_MAP_BYTES_PER_TEXEL,
+    )
 }
 
 /// Number of light views [`render_light_maps`] renders for `light`: six for a point light's

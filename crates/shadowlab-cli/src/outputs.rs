@@ -1,0 +1,173 @@
+//! The files a command will write, checked before any work: each has the extension of
+//! its documented format, no two name the same file, none replaces an existing file
+//! without `--force`, none goes through a dangling symbolic link, and each one's folder
+//! exists. A report folder is recognised by a marker file only shadowlab writes.
+
+use crate::commands::BadInput;
+use anyhow::Result;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The file `compare` writes into its report folder, and only there: a folder holding it
+/// is an earlier report, which may be written over without `--force`.
+pub const REPORT_MARKER: &str = ".shadowlab-report";
+
+/// What the marker file says.
+const REPORT_MARKER_TEXT: &str =
+    "This folder is a shadowlab report; `shadowlab compare --out` may replace its files.\n";
+
+/// One file a command is about to write.
+pub struct Planned {
+    /// The file.
+    pub path: PathBuf,
+    /// The flag (or flag and role) that names it, for messages.
+    pub flag: String,
+    /// The extensions its format allows (lower case, without the dot); empty: any.
+    pub extensions: &'static [&'static str],
+}
+
+impl Planned {
+    /// A file named by `flag` that must end in one of `extensions`.
+    pub fn new(path: &Path, flag: impl Into<String>, extensions: &'static [&'static str]) -> Self {
+        Planned {
+            path: path.to_path_buf(),
+            flag: flag.into(),
+            extensions,
+        }
+    }
+}
+
+fn bad(msg: String) -> anyhow::Error {
+    BadInput(msg).into()
+}
+
+/// The absolute form of `path` that two spellings of one file share: its folder made
+/// canonical (it exists, or the check fails first) and its name kept.
+fn identity(path: &Path) -> PathBuf {
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let dir = std::fs::canonicalize(parent).unwrap_or_else(|_| parent.to_path_buf());
+    match path.file_name() {
+        Some(n) => dir.join(n),
+        None => dir,
+    }
+}
+
+/// Checks every planned file (see the module doc); `force` allows replacing existing
+/// regular files, never folders or dangling links.
+pub fn check(planned: &[Planned], force: bool) -> Result<()> {
+    let mut seen: BTreeMap<PathBuf, &str> = BTreeMap::new();
+    for p in planned {
+        let shown = p.path.display();
+        if !p.extensions.is_empty() {
+            let ext = p
+                .path
+                .extension()
+                .and_then(|e| e.to_str())
+                .map(|e| e.to_ascii_lowercase());
+            if !ext.is_some_and(|e| p.extensions.contains(&e.as_str())) {
+                let want: Vec<String> = p.extensions.iter().map(|e| format!(".{e}")).collect();
+                return Err(bad(format!(
+                    "{} {shown} must end in {} (the format it writes)",
+                    p.flag,
+                    want.join(" or ")
+                )));
+            }
+        }
+        check_one(&p.path, &p.flag, force)?;
+        if let Some(other) = seen.insert(identity(&p.path), &p.flag) {
+            return Err(bad(format!(
+                "{} and {} both name the file {shown}; give each output its own file",
+                other, p.flag
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// One file: its folder exists, and it is new, or an existing regular file with `force`.
+fn check_one(path: &Path, flag: &str, force: bool) -> Result<()> {
+    let shown = path.display();
+    if let Ok(link) = std::fs::symlink_metadata(path) {
+        if link.file_type().is_symlink() && std::fs::metadata(path).is_err() {
+            return Err(bad(format!(
+                "{flag} {shown} is a symbolic link to a file that does not exist; remove the link or name another file"
+            )));
+        }
+        let meta = std::fs::metadata(path).unwrap_or(link);
+        if !meta.is_file() {
+            let kind = shadowlab::files::special_kind(&meta.file_type()).unwrap_or("not a file");
+            return Err(bad(format!(
+                "{flag} {shown} is {kind}, not a file that can be written"
+            )));
+        }
+        if !force {
+            return Err(bad(format!(
+                "{flag} {shown} already exists; pass --force to overwrite it"
+            )));
+        }
+        return Ok(());
+    }
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Err(bad(format!(
+            "{flag} {shown}: the folder {} does not exist",
+            parent.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Checks a report folder before any work: it may be new, empty, or an earlier report
+/// (it holds [`REPORT_MARKER`]); anything else needs `force`. Creates nothing.
+pub fn check_report_dir(dir: &Path, force: bool) -> Result<()> {
+    let shown = dir.display();
+    if let Ok(link) = std::fs::symlink_metadata(dir) {
+        let Ok(meta) = std::fs::metadata(dir) else {
+            return Err(bad(format!(
+                "--out {shown} is a symbolic link to a folder that does not exist"
+            )));
+        };
+        if !meta.is_dir() {
+            let _ = link;
+            return Err(bad(format!("--out {shown} exists and is not a folder")));
+        }
+        let non_empty = std::fs::read_dir(dir)
+            .map_err(|e| bad(format!("--out {shown} {}", shadowlab::files::io_reason(&e))))?
+            .next()
+            .is_some();
+        let is_report = std::fs::symlink_metadata(dir.join(REPORT_MARKER))
+            .is_ok_and(|m| m.file_type().is_file());
+        if non_empty && !is_report && !force {
+            return Err(bad(format!(
+                "--out {shown} is a non-empty folder that is not a shadowlab report; pass --force to write into it"
+            )));
+        }
+    } else {
+        let parent = match dir.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        if !parent.is_dir() {
+            return Err(bad(format!(
+                "--out {shown}: the folder {} does not exist",
+                parent.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Creates the report folder (checked by [`check_report_dir`]) with its marker.
+pub fn create_report_dir(dir: &Path) -> Result<()> {
+    use anyhow::Context;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let marker = dir.join(REPORT_MARKER);
+    std::fs::write(&marker, REPORT_MARKER_TEXT)
+        .with_context(|| format!("cannot write {}", marker.display()))
+}

@@ -1,0 +1,196 @@
+//! The `shadowlab` Python package's native module: scenes from files or NumPy arrays,
+//! cameras, lights, and the techniques' shadow terms as NumPy arrays. Every long
+//! computation runs with the GIL released, on a copy of the inputs the call owns.
+//!
+//! Frames are set up as `shadowlab render` and `shadowlab compare` set them up — the
+//! scene's camera (or the auto-framed one) with its depth range fitted to the scene, the
+//! scene's light (or the default one) normalized — so the same scene and parameters give
+//! the command line's values bit for bit.
+
+mod convert;
+mod scene;
+
+use convert::{bad, py_err, vec3_of, ShadowlabError};
+use pyo3::prelude::*;
+use shadowlab::camera::Camera;
+use shadowlab::light::Light;
+
+/// A perspective pinhole camera (pixel `(x, y)` covers `[x, x+1) × [y, y+1)`, row 0 at the
+/// top; `fov_y_deg` is the vertical field of view).
+#[pyclass(name = "Camera", module = "shadowlab", from_py_object)]
+#[derive(Clone, Copy)]
+pub struct PyCamera {
+    pub inner: Camera,
+}
+
+#[pymethods]
+impl PyCamera {
+    #[new]
+    #[pyo3(signature = (eye, target, fov_y_deg = 45.0, width = 1024, height = 768))]
+    fn new(
+        eye: &Bound<'_, PyAny>,
+        target: &Bound<'_, PyAny>,
+        fov_y_deg: f32,
+        width: u32,
+        height: u32,
+    ) -> PyResult<Self> {
+        let c = Camera::look_at(
+            vec3_of(eye, "camera eye")?,
+            vec3_of(target, "camera target")?,
+            fov_y_deg,
+            width,
+            height,
+        );
+        c.validate().map_err(py_err)?;
+        Ok(PyCamera { inner: c })
+    }
+
+    /// Eye position.
+    #[getter]
+    fn eye(&self) -> [f32; 3] {
+        self.inner.eye.to_array()
+    }
+    /// The point looked at.
+    #[getter]
+    fn target(&self) -> [f32; 3] {
+        self.inner.target.to_array()
+    }
+    /// Vertical field of view in degrees.
+    #[getter]
+    fn fov_y_deg(&self) -> f32 {
+        self.inner.fov_y_deg
+    }
+    /// Image width in pixels.
+    #[getter]
+    fn width(&self) -> u32 {
+        self.inner.width
+    }
+    /// Image height in pixels.
+    #[getter]
+    fn height(&self) -> u32 {
+        self.inner.height
+    }
+
+    /// The same camera with another image size.
+    fn with_size(&self, width: u32, height: u32) -> PyResult<Self> {
+        let mut c = self.inner;
+        (c.width, c.height) = (width, height);
+        c.validate().map_err(py_err)?;
+        Ok(PyCamera { inner: c })
+    }
+
+    fn __repr__(&self) -> String {
+        let c = &self.inner;
+        format!(
+            "Camera(eye={:?}, target={:?}, fov_y_deg={}, width={}, height={})",
+            c.eye.to_array(),
+            c.target.to_array(),
+            c.fov_y_deg,
+            c.width,
+            c.height
+        )
+    }
+}
+
+/// A light: `Light.directional(to_light)`, `Light.point(position)` or
+/// `Light.spot(position, target, fov_deg)`.
+#[pyclass(name = "Light", module = "shadowlab", from_py_object)]
+#[derive(Clone, Copy)]
+pub struct PyLight {
+    pub inner: Light,
+}
+
+impl PyLight {
+    fn checked(l: Light) -> PyResult<Self> {
+        l.validate().map_err(py_err)?;
+        Ok(PyLight {
+            inner: l.normalized(),
+        })
+    }
+}
+
+#[pymethods]
+impl PyLight {
+    /// Parallel light from the direction `to_light` (from the scene towards the light).
+    #[staticmethod]
+    fn directional(to_light: &Bound<'_, PyAny>) -> PyResult<Self> {
+        Self::checked(Light::Directional {
+            to_light: vec3_of(to_light, "directional light direction")?,
+        })
+    }
+    /// Light in every direction from `position`.
+    #[staticmethod]
+    fn point(position: &Bound<'_, PyAny>) -> PyResult<Self> {
+        Self::checked(Light::Point {
+            position: vec3_of(position, "point light position")?,
+        })
+    }
+    /// A cone of light from `position` towards `target`, `fov_deg` wide.
+    #[staticmethod]
+    fn spot(
+        position: &Bound<'_, PyAny>,
+        target: &Bound<'_, PyAny>,
+        fov_deg: f32,
+    ) -> PyResult<Self> {
+        Self::checked(Light::Spot {
+            position: vec3_of(position, "spot light position")?,
+            target: vec3_of(target, "spot light target")?,
+            fov_deg,
+        })
+    }
+    /// `"directional"`, `"point"` or `"spot"`.
+    #[getter]
+    fn kind(&self) -> &'static str {
+        self.inner.kind()
+    }
+    /// The light as `metrics.json` records it.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        convert::json_to_py(
+            py,
+            &serde_json::to_value(self.inner).expect("lights serialize"),
+        )
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "Light({})",
+            serde_json::to_string(&self.inner).unwrap_or_default()
+        )
+    }
+}
+
+/// Every technique name, in the order reports list them.
+#[pyfunction]
+fn techniques() -> Vec<&'static str> {
+    shadowlab::techniques::ALL.to_vec()
+}
+
+/// Reads a visibility EXR written by `shadowlab render --visibility`: an `(H, W, 4)`
+/// float32 array, RGB = shadow term, A = coverage.
+#[pyfunction]
+fn read_exr<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyAny>> {
+    let (vis, covered) = py
+        .detach(|| shadowlab::shade::read_visibility_exr(&path))
+        .map_err(py_err)?;
+    let flat: Vec<f32> = vis
+        .value
+        .iter()
+        .zip(&covered)
+        .flat_map(|(v, &c)| [v.x, v.y, v.z, if c { 1.0 } else { 0.0 }])
+        .collect();
+    let arr =
+        numpy::ndarray::Array3::from_shape_vec((vis.height as usize, vis.width as usize, 4), flat)
+            .map_err(|e| bad(e.to_string()))?;
+    Ok(numpy::IntoPyArray::into_pyarray(arr, py).into_any())
+}
+
+#[pymodule]
+fn _shadowlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyCamera>()?;
+    m.add_class::<PyLight>()?;
+    m.add_class::<scene::PyScene>()?;
+    m.add_function(wrap_pyfunction!(techniques, m)?)?;
+    m.add_function(wrap_pyfunction!(read_exr, m)?)?;
+    m.add("ShadowlabError", m.py().get_type::<ShadowlabError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -1,0 +1,469 @@
+//! `shadowlab.Scene`: a scene and the frames rendered from it.
+
+use crate::convert::{self, bad, py_err, vec3_of, vec3s};
+use crate::{PyCamera, PyLight};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use serde_json::{json, Value};
+use shadowlab::camera::Camera;
+use shadowlab::compare::compare as measure;
+use shadowlab::light::Light;
+use shadowlab::math::{vec3, Vec3};
+use shadowlab::multi_light::PerLight;
+use shadowlab::points::{visibility_of_points, Points};
+use shadowlab::reference::Reference;
+use shadowlab::sampling::{pattern, PatternKind};
+use shadowlab::scene::mesh::IndexedMesh;
+use shadowlab::scene::{Material, Scene};
+use shadowlab::techniques::{self, Frame, ShadowTechnique, Shadows};
+use shadowlab::view::ViewSamples;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// The light a scene without one is lit by, as the command line chooses it.
+const DEFAULT_TO_LIGHT: Vec3 = vec3(-0.4, 1.0, 0.3);
+
+/// A scene: world-space triangles with their materials, and the camera and light that
+/// came with it (if any).
+#[pyclass(name = "Scene", module = "shadowlab")]
+pub struct PyScene {
+    inner: Arc<Scene>,
+    /// The faces of each mesh added from arrays, to move it later.
+    faces: BTreeMap<usize, Vec<[u32; 3]>>,
+}
+
+/// Technique parameters from a Python mapping (values as `str()` gives them).
+fn params_of(p: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String)>> {
+    let mut out = Vec::new();
+    if let Some(d) = p {
+        for (k, v) in d.iter() {
+            out.push((k.str()?.to_string(), v.str()?.to_string()));
+        }
+    }
+    Ok(out)
+}
+
+fn make(name: &str, params: &[(String, String)]) -> shadowlab::Result<Box<dyn ShadowTechnique>> {
+    let mut t = techniques::create(name)?;
+    for (k, v) in params {
+        t.set_param(k, v)?;
+    }
+    Ok(t)
+}
+
+/// A technique's failure with the technique named, as the command line reports it.
+fn in_technique(name: &str, e: shadowlab::Error) -> shadowlab::Error {
+    let msg = format!("technique {name}: {e}");
+    if e.is_bad_input() {
+        shadowlab::Error::Param(msg)
+    } else {
+        shadowlab::Error::Output {
+            path: Default::default(),
+            what: msg,
+        }
+    }
+}
+
+fn material(
+    name: String,
+    color: Option<&Bound<'_, PyAny>>,
+    tr: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Material> {
+    let mut m = Material {
+        name,
+        ..Material::default()
+    };
+    if let Some(c) = color {
+        m.color = vec3_of(c, "color")?;
+    }
+    if let Some(t) = tr {
+        m.transmittance = vec3_of(t, "transmittance")?;
+    }
+    Ok(m)
+}
+
+impl PyScene {
+    /// The camera and light of a frame, resolved as the command line resolves them.
+    fn resolve(
+        &self,
+        camera: Option<PyCamera>,
+        light: Option<PyLight>,
+    ) -> PyResult<(Camera, Light)> {
+        let s = &self.inner;
+        let mut c = match camera.map(|c| c.inner).or(s.camera) {
+            Some(c) => c,
+            None => {
+                let mut framing = Scene::new("");
+                framing.bounds = s.bounds;
+                framing.auto_frame(false);
+                framing.camera.expect("auto_frame sets a camera")
+            }
+        };
+        c.fit_depth_range(&s.bounds);
+        c.validate().map_err(py_err)?;
+        let l = light
+            .map(|l| l.inner)
+            .or(s.light)
+            .unwrap_or(Light::Directional {
+                to_light: DEFAULT_TO_LIGHT.normalize(),
+            });
+        l.validate().map_err(py_err)?;
+        Ok((c, l.normalized()))
+    }
+}
+
+#[pymethods]
+impl PyScene {
+    /// A built-in scene by name, or a `.toml`, `.obj`, `.ply`, `.gltf` or `.glb` file
+    /// (bare meshes get a ground plane, a camera and a light); `params` are a built-in
+    /// scene's parameters.
+    #[staticmethod]
+    #[pyo3(signature = (spec, params = None))]
+    fn load(py: Python<'_>, spec: String, params: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let params: BTreeMap<String, String> = params_of(params)?.into_iter().collect();
+        let s = py
+            .detach(|| shadowlab::scene::load(&spec, &params))
+            .map_err(py_err)?;
+        Ok(PyScene {
+            inner: Arc::new(s),
+            faces: BTreeMap::new(),
+        })
+    }
+
+    /// A scene of one mesh: `vertices` `(n, 3)` float32, `faces` `(m, 3)` integer indices.
+    /// `ground=True` adds a ground plane under it; the camera and light are chosen to
+    /// frame it unless given to each call.
+    #[staticmethod]
+    #[pyo3(signature = (vertices, faces, *, name = "arrays".to_string(), color = None, transmittance = None, ground = false))]
+    fn from_arrays(
+        vertices: &Bound<'_, PyAny>,
+        faces: &Bound<'_, PyAny>,
+        name: String,
+        color: Option<&Bound<'_, PyAny>>,
+        transmittance: Option<&Bound<'_, PyAny>>,
+        ground: bool,
+    ) -> PyResult<Self> {
+        let v = vec3s(vertices, "vertices")?;
+        let f = convert::faces(faces, "faces", v.len())?;
+        let m = material("mesh0".into(), color, transmittance)?;
+        let mut s = Scene::from_meshes(
+            &name,
+            &[IndexedMesh {
+                positions: &v,
+                indices: &f,
+                material: &m,
+            }],
+        )
+        .map_err(py_err)?;
+        if ground {
+            // As the command line frames a bare mesh: the ground, and a camera and light
+            // chosen for the mesh alone.
+            s.auto_frame(true);
+        }
+        Ok(PyScene {
+            inner: Arc::new(s),
+            faces: BTreeMap::from([(0, f)]),
+        })
+    }
+
+    /// Adds a mesh from arrays; returns its mesh number (for `set_mesh_vertices`).
+    #[pyo3(signature = (vertices, faces, *, color = None, transmittance = None))]
+    fn add_mesh(
+        &mut self,
+        vertices: &Bound<'_, PyAny>,
+        faces: &Bound<'_, PyAny>,
+        color: Option<&Bound<'_, PyAny>>,
+        transmittance: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<usize> {
+        let v = vec3s(vertices, "vertices")?;
+        let f = convert::faces(faces, "faces", v.len())?;
+        let s = Arc::make_mut(&mut self.inner);
+        let m = material(format!("mesh{}", s.mesh_count()), color, transmittance)?;
+        let i = s
+            .add_mesh(&IndexedMesh {
+                positions: &v,
+                indices: &f,
+                material: &m,
+            })
+            .map_err(py_err)?;
+        self.faces.insert(i, f);
+        Ok(i)
+    }
+
+    /// Moves mesh `mesh` (added from arrays) to new vertex positions, same faces: a moving
+    /// or deforming object. Techniques see the scene's revision change and drop what they
+    /// kept for the old geometry.
+    fn set_mesh_vertices(&mut self, mesh: usize, vertices: &Bound<'_, PyAny>) -> PyResult<()> {
+        let f = self
+            .faces
+            .get(&mesh)
+            .ok_or_else(|| bad(format!("scene has no mesh {mesh} added from arrays")))?;
+        let v = vec3s(vertices, "vertices")?;
+        Arc::make_mut(&mut self.inner)
+            .replace_mesh(mesh, &v, f)
+            .map_err(py_err)
+    }
+
+    /// The scene's name.
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name.clone()
+    }
+    /// Number of triangles.
+    #[getter]
+    fn triangles(&self) -> usize {
+        self.inner.len()
+    }
+    /// Bumped on every geometry edit.
+    #[getter]
+    fn revision(&self) -> u64 {
+        self.inner.revision
+    }
+    /// `(min, max)` corners of the bounding box.
+    #[getter]
+    fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        (
+            self.inner.bounds.min.to_array(),
+            self.inner.bounds.max.to_array(),
+        )
+    }
+    /// The camera a frame uses when none is given (the scene's own, or one that frames it).
+    #[getter]
+    fn camera(&self) -> PyResult<PyCamera> {
+        Ok(PyCamera {
+            inner: self.resolve(None, None)?.0,
+        })
+    }
+    /// The light a frame uses when none is given (the scene's own, or the default).
+    #[getter]
+    fn light(&self) -> PyResult<PyLight> {
+        Ok(PyLight {
+            inner: self.resolve(None, None)?.1,
+        })
+    }
+
+    /// The shadow term of one frame: an `(H, W, 3)` float32 array of RGB transmittance
+    /// towards the light (1 = lit; uncovered pixels 1). The GIL is released meanwhile.
+    #[pyo3(signature = (technique = "afsm".to_string(), camera = None, light = None, params = None))]
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        technique: String,
+        camera: Option<PyCamera>,
+        light: Option<PyLight>,
+        params: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (c, l) = self.resolve(camera, light)?;
+        let params = params_of(params)?;
+        let scene = Arc::clone(&self.inner);
+        let vis = py
+            .detach(move || -> shadowlab::Result<_> {
+                let mut t = make(&technique, &params)?;
+                let view = ViewSamples::render(&scene, &c);
+                let s = t
+                    .render(&Frame::new(&scene, &c, &l, &view))
+                    .map_err(|e| in_technique(&technique, e))?;
+                Ok(s.visibility)
+            })
+            .map_err(py_err)?;
+        Ok(convert::image(py, vis.width, vis.height, &vis.value).into_any())
+    }
+
+    /// One shadow term per light of one frame (a list of `(H, W, 3)` arrays), each equal
+    /// to a one-light frame's.
+    #[pyo3(signature = (technique, lights, camera = None, params = None))]
+    fn render_lights<'py>(
+        &self,
+        py: Python<'py>,
+        technique: String,
+        lights: Vec<PyLight>,
+        camera: Option<PyCamera>,
+        params: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<Vec<Bound<'py, PyAny>>> {
+        let (c, l0) = self.resolve(camera, None)?;
+        let params = params_of(params)?;
+        let lights: Vec<Light> = lights.iter().map(|l| l.inner).collect();
+        let scene = Arc::clone(&self.inner);
+        let all = py
+            .detach(move || -> shadowlab::Result<Vec<Shadows>> {
+                let mut per = PerLight::new(&technique, &params)?;
+                let view = ViewSamples::render(&scene, &c);
+                per.render(&Frame::new(&scene, &c, &l0, &view), &lights)
+                    .map_err(|e| in_technique(&technique, e))
+            })
+            .map_err(py_err)?;
+        Ok(all
+            .iter()
+            .map(|s| {
+                convert::image(
+                    py,
+                    s.visibility.width,
+                    s.visibility.height,
+                    &s.visibility.value,
+                )
+                .into_any()
+            })
+            .collect())
+    }
+
+    /// The shadow term of arbitrary points: `points` and `normals` `(n, 3)`; `triangles`
+    /// optionally names the triangle each point lies on (skipped by its shadow ray).
+    /// Returns `(n, 3)` float32. Techniques: raytrace and afsm (exact), sm, pcf, csm, vsm.
+    #[pyo3(signature = (points, normals, light = None, technique = "raytrace".to_string(), params = None, triangles = None))]
+    fn visibility<'py>(
+        &self,
+        points: &Bound<'py, PyAny>,
+        normals: &Bound<'py, PyAny>,
+        light: Option<PyLight>,
+        technique: String,
+        params: Option<&Bound<'py, PyDict>>,
+        triangles: Option<Vec<u32>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let py = points.py();
+        let (_, l) = self.resolve(None, light)?;
+        let p = vec3s(points, "points")?;
+        let n = vec3s(normals, "normals")?;
+        let params = params_of(params)?;
+        let scene = Arc::clone(&self.inner);
+        let v = py
+            .detach(move || -> shadowlab::Result<Vec<Vec3>> {
+                let mut t = make(&technique, &params)?;
+                let q = Points {
+                    triangle: triangles.as_deref(),
+                    ..Points::new(&p, &n)
+                };
+                visibility_of_points(t.as_mut(), &scene, &l, &q)
+            })
+            .map_err(py_err)?;
+        Ok(convert::rows(py, &v).into_any())
+    }
+
+    /// Every technique of `techniques` (default: all) against the ray-traced reference on
+    /// one frame: a dict shaped like `metrics.json` (`results[i]` with `mismatch_rate`,
+    /// `mean_abs_error`, `time_ms`, `memory_bytes`, ...). `params` maps a technique name
+    /// to its parameters.
+    #[pyo3(signature = (techniques = None, camera = None, light = None, params = None, reference_spp = 1, reference_pattern = "grid".to_string()))]
+    fn compare<'py>(
+        slf: PyRef<'py, Self>,
+        techniques: Option<Vec<String>>,
+        camera: Option<PyCamera>,
+        light: Option<PyLight>,
+        params: Option<&Bound<'py, PyDict>>,
+        reference_spp: u32,
+        reference_pattern: String,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let (c, l) = slf.resolve(camera, light)?;
+        let names: Vec<String> =
+            techniques.unwrap_or_else(|| techniques::ALL.iter().map(|s| s.to_string()).collect());
+        let mut per: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
+        if let Some(d) = params {
+            for (k, v) in d.iter() {
+                let t = k.str()?.to_string();
+                if !names.contains(&t) {
+                    return Err(bad(format!(
+                        "params names technique {t}, which is not among techniques {}",
+                        names.join(",")
+                    )));
+                }
+                let v = v
+                    .cast_into::<PyDict>()
+                    .map_err(|_| bad(format!("params[{t:?}] must be a dict of parameters")))?;
+                per.insert(t, params_of(Some(&v))?);
+            }
+        }
+        let spec = CompareSpec {
+            kind: reference_pattern.parse().map_err(py_err)?,
+            names,
+            params: per,
+            spp: reference_spp,
+            pattern_name: reference_pattern,
+        };
+        let scene = Arc::clone(&slf.inner);
+        let metrics = py
+            .detach(move || compare_frame(&scene, &c, &l, &spec))
+            .map_err(py_err)?;
+        convert::json_to_py(py, &metrics)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Scene(name={:?}, triangles={})",
+            self.inner.name,
+            self.inner.len()
+        )
+    }
+}
+
+/// What `Scene.compare` runs: techniques with their parameters, and the reference's
+/// sub-pixel samples.
+struct CompareSpec {
+    names: Vec<String>,
+    params: BTreeMap<String, Vec<(String, String)>>,
+    kind: PatternKind,
+    spp: u32,
+    pattern_name: String,
+}
+
+/// The `metrics.json` of one frame (without the report's image files).
+fn compare_frame(
+    scene: &Scene,
+    camera: &Camera,
+    light: &Light,
+    spec: &CompareSpec,
+) -> shadowlab::Result<Value> {
+    let CompareSpec {
+        names,
+        params,
+        kind,
+        spp,
+        pattern_name,
+    } = spec;
+    let (kind, spp) = (*kind, *spp);
+    let samples = pattern(kind, spp)?;
+    let mut runs = Vec::new();
+    for n in names {
+        runs.push(make(n, params.get(n).map_or(&[][..], |p| p))?);
+    }
+    let view = ViewSamples::render(scene, camera);
+    let frame = Frame::new(scene, camera, light, &view);
+    let t0 = std::time::Instant::now();
+    let reference = Reference::build(scene);
+    let bvh_ms = reference.build_ms;
+    let truth = reference.visibility(&frame, &samples);
+    let ref_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let mut results = Vec::new();
+    for (name, t) in names.iter().zip(runs.iter_mut()) {
+        let t0 = std::time::Instant::now();
+        let s = t.render(&frame).map_err(|e| in_technique(name, e))?;
+        let ms = t0.elapsed().as_secs_f64() * 1e3;
+        let m = measure(&view, &s.visibility, &truth);
+        let stages: serde_json::Map<String, Value> = s
+            .stats
+            .stages_ms
+            .iter()
+            .map(|(k, v)| (k.clone(), json!(v)))
+            .collect();
+        results.push(json!({
+            "technique": t.name(), "label": name, "params": t.params(),
+            "time_ms": ms, "stages_ms": stages, "memory_bytes": s.stats.memory_bytes,
+            "counters": s.stats.counters,
+            "mismatch_rate": m.mismatch_rate, "mean_abs_error": m.mean_abs_error,
+            "mean_abs_error_rgb": m.mean_abs_error_rgb,
+        }));
+    }
+    Ok(json!({
+        "scene": scene.name, "triangles": scene.len(),
+        "width": view.width, "height": view.height,
+        "covered_pixels": view.covered_count(), "camera_pass_ms": view.time_ms,
+        "frames": 1, "threads": rayon::current_num_threads(),
+        "shadowlab_version": env!("CARGO_PKG_VERSION"),
+        "camera": serde_json::to_value(camera).expect("cameras serialize"),
+        "light": serde_json::to_value(light).expect("lights serialize"),
+        "reference": {
+            "technique": "raytrace", "samples_per_pixel": spp, "pattern": pattern_name,
+            "time_ms": ref_ms, "bvh_build_ms": bvh_ms, "trace_ms": ref_ms - bvh_ms,
+        },
+        "results": results,
+    }))
+}

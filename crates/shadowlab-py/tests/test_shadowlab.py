@@ -1,0 +1,170 @@
+"""The Python package: arrays in, images out, the command line's values, errors, the GIL."""
+
+import os
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import shadowlab as sl
+
+REPO = Path(__file__).resolve().parents[3]
+CLI = Path(os.environ.get("SHADOWLAB_CLI", REPO / "target" / "release" / "shadowlab"))
+
+
+def ground_and_box():
+    """A ground quad and a unit box floating above it, as arrays."""
+    ground = np.array([[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]], np.float32)
+    corners = np.array(
+        [[x, y, z] for z in (-0.5, 0.5) for y in (0.5, 1.5) for x in (-0.5, 0.5)], np.float32
+    )
+    box = np.array(
+        [[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
+         [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]],
+        np.uint32,
+    )
+    return ground, np.array([[0, 1, 2], [0, 2, 3]], np.uint32), corners, box
+
+
+def box_scene():
+    g, gf, b, bf = ground_and_box()
+    scene = sl.Scene.from_arrays(g, gf, name="box")
+    scene.add_mesh(b, bf, color=(0.8, 0.2, 0.2))
+    return scene
+
+
+CAMERA = sl.Camera((0.0, 5.0, 7.0), (0.0, 0.0, 0.0), 50.0, 96, 72)
+SUN = sl.Light.directional((0.0, 1.0, 0.0))
+
+
+def test_arrays_in_image_out():
+    scene = box_scene()
+    assert scene.triangles == 14
+    img = scene.render("afsm", CAMERA, SUN)
+    assert img.shape == (72, 96, 3) and img.dtype == np.float32
+    # The shadow of the box falls straight down: the pixel at the box's foot is dark,
+    # the ground near the image's corner is lit, and afsm equals the reference.
+    ref = scene.render("raytrace", CAMERA, SUN)
+    assert np.array_equal(img, ref)
+    assert 0.0 < (img[..., 0] == 0.0).mean() < 0.5
+    assert img[70, 2, 0] == 1.0
+    points = np.array([[0.0, 0.0, 0.0], [3.0, 0.0, 3.0]], np.float32)
+    normals = np.array([[0.0, 1.0, 0.0]] * 2, np.float32)
+    vis = scene.visibility(points, normals, SUN)
+    assert vis.shape == (2, 3) and vis.dtype == np.float32
+    assert vis[0].tolist() == [0.0, 0.0, 0.0] and vis[1].tolist() == [1.0, 1.0, 1.0]
+    assert np.array_equal(scene.visibility(points, normals, SUN, technique="afsm"), vis)
+
+
+def test_equal_to_the_cli_exr(tmp_path):
+    assert CLI.is_file(), f"build the command line first (cargo build --release); looked for {CLI}"
+    for technique, params in [("pcf", {"resolution": 1024}), ("afsm", {}), ("csm", {})]:
+        exr = tmp_path / f"{technique}.exr"
+        args = [str(CLI), "render", "--scene", "chessboard", "--width", "160", "--height", "120",
+                "--technique", technique, "--output", str(tmp_path / f"{technique}.png"),
+                "--visibility", str(exr)]
+        for k, v in params.items():
+            args += ["--param", f"{k}={v}"]
+        subprocess.run(args, check=True, capture_output=True)
+        cli = sl.read_exr(exr)
+        scene = sl.Scene.load("chessboard")
+        ours = scene.render(technique, scene.camera.with_size(160, 120), params=params)
+        assert ours.shape == (120, 160, 3)
+        assert np.array_equal(ours, cli[..., :3]), technique
+        assert 0.0 < cli[..., 3].mean() <= 1.0
+
+
+def test_nan_vertices_raise_the_library_sentence():
+    g, gf, _, _ = ground_and_box()
+    g[2, 1] = np.nan
+    with pytest.raises(sl.ShadowlabError) as e:
+        sl.Scene.from_arrays(g, gf, name="broken")
+    assert str(e.value) == "scene broken: triangle 0 has a non-finite (NaN or infinite) vertex"
+    assert isinstance(e.value, ValueError)
+
+
+def test_bad_input_is_named():
+    g, gf, _, _ = ground_and_box()
+    with pytest.raises(sl.ShadowlabError, match=r"faces row 1 names vertex 7, outside 0\.\.4"):
+        sl.Scene.from_arrays(g, np.array([[0, 1, 2], [0, 2, 7]]))
+    with pytest.raises(sl.ShadowlabError, match=r"vertices must have shape \(n, 3\), not \(4, 2\)"):
+        sl.Scene.from_arrays(g[:, :2], gf)
+    scene = box_scene()
+    with pytest.raises(sl.ShadowlabError, match="unknown technique \"nope\""):
+        scene.render("nope", CAMERA, SUN)
+    with pytest.raises(sl.ShadowlabError, match="technique sm has no parameter \"size\""):
+        scene.render("sm", CAMERA, SUN, {"size": 3})
+    with pytest.raises(sl.ShadowlabError, match="directional light direction must be a finite"):
+        sl.Light.directional((0.0, 0.0, 0.0))
+    with pytest.raises(sl.ShadowlabError, match="technique psm cannot answer point queries"):
+        scene.visibility(np.zeros((1, 3)), np.ones((1, 3)), SUN, technique="psm")
+
+
+def test_the_gil_is_released_while_rendering():
+    scene = sl.Scene.load("chessboard")
+    camera = scene.camera.with_size(640, 480)
+    ticks = []
+    stop = threading.Event()
+
+    def count():
+        while not stop.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.001)
+
+    worker = threading.Thread(target=count)
+    worker.start()
+    try:
+        time.sleep(0.05)  # the worker is running
+        t0 = time.perf_counter()
+        scene.render("raytrace", camera)
+        t1 = time.perf_counter()
+    finally:
+        stop.set()
+        worker.join()
+    during = [t for t in ticks if t0 < t < t1]
+    # With the GIL held the worker could not tick at all until the call returned.
+    assert t1 - t0 > 0.05, "the frame is long enough to tell"
+    assert len(during) >= 10, f"{len(during)} ticks during a {1e3 * (t1 - t0):.0f} ms render"
+
+
+def test_two_lights_equal_two_one_light_frames():
+    scene = box_scene()
+    lights = [SUN, sl.Light.point((2.0, 4.0, 1.0))]
+    both = scene.render_lights("sm", lights, CAMERA)
+    assert len(both) == 2
+    for vis, light in zip(both, lights):
+        assert np.array_equal(vis, scene.render("sm", CAMERA, light))
+    assert not np.array_equal(both[0], both[1])
+
+
+def test_a_moving_object_moves_its_shadow():
+    g, gf, b, bf = ground_and_box()
+    scene = box_scene()
+    before = scene.render("asm", CAMERA, SUN, {"time-budget-ms": "none"})
+    revision = scene.revision
+    scene.set_mesh_vertices(1, b + np.float32([2.0, 0.0, 0.0]))
+    assert scene.revision == revision + 1
+    after = scene.render("asm", CAMERA, SUN, {"time-budget-ms": "none"})
+    moved = sl.Scene.from_arrays(g, gf, name="box")
+    moved.add_mesh(b + np.float32([2.0, 0.0, 0.0]), bf)
+    assert np.array_equal(after, moved.render("asm", CAMERA, SUN, {"time-budget-ms": "none"}))
+    assert not np.array_equal(before, after)
+
+
+def test_compare_is_shaped_like_metrics_json():
+    scene = box_scene()
+    m = scene.compare(["raytrace", "afsm", "sm"], CAMERA, SUN, {"sm": {"resolution": 512}})
+    assert m["width"] == 96 and m["height"] == 72 and m["triangles"] == 14
+    assert m["reference"]["technique"] == "raytrace"
+    assert m["reference"]["samples_per_pixel"] == 1
+    assert m["light"] == {"kind": "directional", "to_light": [0.0, 1.0, 0.0]}
+    assert set(m["camera"]) >= {"eye", "target", "up", "fov_y_deg", "near", "far", "width", "height"}
+    by = {r["technique"]: r for r in m["results"]}
+    assert by["raytrace"]["mismatch_rate"] == 0.0 and by["afsm"]["mismatch_rate"] == 0.0
+    assert by["sm"]["params"]["resolution"] == 512
+    for r in m["results"]:
+        assert {"time_ms", "stages_ms", "memory_bytes", "counters", "mean_abs_error"} <= set(r)
+    assert sl.techniques()[0] == "raytrace"
