@@ -24,7 +24,7 @@ use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::PlocBuilder;
 use obvhs::triangle::Triangle;
-use obvhs::{Boundable, BvhBuildParams};
+use obvhs::BvhBuildParams;
 
 /// The node groups `obvhs`'s CWBVH traversal can hold on its stack.
 pub const TRAVERSAL_STACK: usize = 32;

@@ -76,7 +76,8 @@ impl Warp {
             lo = lo.min(xx);
             hi = hi.max(xx);
         }
-        if !(lo < hi) {
+        // Also true when the points gave no window (empty, or NaN).
+        if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less) {
             (lo, hi) = (lo.min(hi) - 1e-6, lo.max(hi) + 1e-6);
         }
         Warp {

@@ -110,11 +110,12 @@ mod tests {
                 return None;
             }
             a.swap(col, piv);
-            for i in 0..5 {
+            let pivot = a[col];
+            for (i, row) in a.iter_mut().enumerate() {
                 if i != col {
-                    let f = a[i][col] / a[col][col];
-                    for j in col..6 {
-                        a[i][j] -= f * a[col][j];
+                    let f = row[col] / pivot[col];
+                    for (r, p) in row.iter_mut().zip(pivot.iter()).skip(col) {
+                        *r -= f * p;
                     }
                 }
             }
