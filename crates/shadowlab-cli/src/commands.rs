@@ -31,7 +31,9 @@ impl std::error::Error for BadInput {}
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// The technique: sm, pcf, psm, asm, afsm, subpixel, csm, vsm or raytrace.
+    /// The technique: sm, pcf, psm, lispsm, cascaded, asm, afsm, subpixel, csm (convolution
+    /// shadow map, also spelled `convolution`), vsm, evsm, msm or raytrace. `cascaded` is the
+    /// cascaded shadow map; `csm` keeps its meaning, the convolution shadow map.
     #[arg(long, default_value = "afsm")]
     pub technique: String,
     /// A technique parameter, e.g. `resolution=2048`.
@@ -62,7 +64,8 @@ pub struct RenderArgs {
 pub struct CompareArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Comma-separated technique names, or `all`.
+    /// Comma-separated technique names, or `all` (see `render --help`; `csm` and
+    /// `convolution` are the convolution shadow map, `cascaded` the cascaded shadow maps).
     #[arg(long, default_value = "all")]
     pub techniques: String,
     /// A technique parameter prefixed with its technique: `sm.resolution=4096`.

@@ -19,7 +19,10 @@ use std::process::ExitCode;
 static ALLOC: shadowlab::limits::GuardedAlloc = shadowlab::limits::GuardedAlloc;
 
 /// Shadow algorithms — alias-free, adaptive, sub-pixel, perspective and convolution shadow
-/// maps beside standard maps, PCF and variance maps — measured against ray tracing.
+/// maps beside standard maps, PCF and variance maps, and the ones engines ship (cascaded,
+/// light-space perspective, exponential variance and moment shadow maps) — measured
+/// against ray tracing. `csm` (or `convolution`) is the convolution shadow map; cascaded
+/// shadow maps are `cascaded`.
 #[derive(Parser, Debug)]
 #[command(name = "shadowlab", version, about, long_about = None)]
 pub struct Cli {

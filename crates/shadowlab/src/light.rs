@@ -185,7 +185,9 @@ pub struct LightSample {
 }
 
 impl LightView {
-    fn new(
+    /// A view from its world-to-light and light-to-clip transforms, depth range and extent
+    /// (see the fields).
+    pub fn new(
         light_from_world: Mat4,
         clip_from_light: Mat4,
         ortho: bool,

@@ -5,6 +5,7 @@
 mod afsm_scaling;
 mod asm_walkthrough;
 mod csm_table;
+mod engines;
 mod psm_lights;
 mod subpixel_scaling;
 
@@ -15,7 +16,8 @@ use std::path::PathBuf;
 /// `shadowlab bench`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct BenchArgs {
-    /// The suite: afsm-scaling, subpixel-scaling, csm-table, asm-walkthrough, psm-lights.
+    /// The suite: afsm-scaling, subpixel-scaling, csm-table, asm-walkthrough, psm-lights,
+    /// engines.
     pub suite: String,
     /// Also write the rows as JSON to this file.
     #[arg(long)]
@@ -23,6 +25,10 @@ pub struct BenchArgs {
     /// A reduced run that finishes in under a minute on two cores.
     #[arg(long)]
     pub quick: bool,
+    /// Write the suite's plots (SVG) into this folder (`engines`: error against memory, and
+    /// error against time with the Pareto front marked, per scene).
+    #[arg(long)]
+    pub plots: Option<PathBuf>,
     /// Runs per measurement (the median is reported).
     #[arg(long, default_value_t = 3)]
     pub repeat: usize,
@@ -41,6 +47,7 @@ pub const SUITES: &[&str] = &[
     "csm-table",
     "asm-walkthrough",
     "psm-lights",
+    "engines",
 ];
 
 /// The median of `n` timed runs of `f`, in milliseconds, and the last result.
@@ -83,6 +90,7 @@ pub fn run(a: &BenchArgs) -> Result<()> {
         "csm-table" => csm_table::run(a)?,
         "asm-walkthrough" => asm_walkthrough::run(a)?,
         "psm-lights" => psm_lights::run(a)?,
+        "engines" => engines::run(a)?,
         _ => bail!(
             "unknown bench suite {:?}: known suites are {}",
             a.suite,

@@ -75,6 +75,10 @@ const SCENES: &[(&str, &str)] = &[
         "fence-far",
         "the fence, boxes and wall on a bounded yard seen from five times as far (minified on screen and in the light's map), with a camera path pulling back (convolution shadow maps, Fig. 10)",
     ),
+    (
+        "fence-leak",
+        "picket fence in front of boxes and columns at staggered depths under a low sun: three depths under one filter, where variance shadow maps leak (convolution shadow maps, Fig. 9)",
+    ),
     ("cage", "a cage of thin bars over a plane: thin shadows that alias"),
     (
         "bumpy",
@@ -108,6 +112,10 @@ pub fn generate(name: &str, params: &BTreeMap<String, String>) -> Result<Scene> 
         "hairball" => hairball(&Params::new(name, params, &["hairs", "seed"])?)?,
         "fence" => fence(&Params::new(name, params, &["distance"])?, false)?,
         "fence-far" => fence(&Params::new(name, params, &["distance"])?, true)?,
+        "fence-leak" => {
+            Params::new(name, params, &[])?;
+            super::fence_leak::build(WIDTH, HEIGHT)
+        }
         "cage" => cage(&Params::new(name, params, &["bars"])?)?,
         "bumpy" => bumpy(&Params::new(name, params, &["resolution"])?)?,
         "room" => room(&Params::new(name, params, &["light"])?)?,

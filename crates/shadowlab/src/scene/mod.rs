@@ -7,6 +7,7 @@
 pub mod auto_light;
 pub mod builtin;
 pub mod export;
+pub mod fence_leak;
 pub mod gltf;
 pub mod mesh;
 pub mod obj;

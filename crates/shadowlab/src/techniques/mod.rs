@@ -10,8 +10,11 @@
 
 pub mod adaptive;
 pub mod alias_free;
+pub mod cascaded;
 pub mod convolution;
 pub mod filtering;
+pub mod lispsm;
+pub mod moments;
 pub mod perspective;
 pub mod raytrace;
 pub mod shadow_map;
@@ -187,7 +190,8 @@ pub trait ShadowTechnique: Send {
 
 /// Every technique name, in the order reports list them.
 pub const ALL: &[&str] = &[
-    "raytrace", "sm", "pcf", "psm", "asm", "afsm", "subpixel", "csm", "vsm",
+    "raytrace", "sm", "pcf", "psm", "asm", "afsm", "subpixel", "csm", "vsm", "evsm", "msm",
+    "cascaded", "lispsm",
 ];
 
 /// A technique by name, with default parameters.
@@ -200,8 +204,12 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
         "asm" => Box::new(adaptive::Adaptive::default()),
         "afsm" => Box::new(alias_free::AliasFree::default()),
         "subpixel" => Box::new(subpixel::Subpixel::default()),
-        "csm" => Box::new(convolution::Convolution::default()),
+        "csm" | "convolution" => Box::new(convolution::Convolution::default()),
         "vsm" => Box::new(variance::Variance::default()),
+        "evsm" => Box::new(moments::evsm::ExponentialVariance::default()),
+        "msm" => Box::new(moments::msm::MomentShadowMap::default()),
+        "cascaded" => Box::new(cascaded::Cascaded::default()),
+        "lispsm" => Box::new(lispsm::LightSpacePerspective::default()),
         _ => {
             return Err(Error::param(format!(
                 "unknown technique {name:?}: known techniques are {}",

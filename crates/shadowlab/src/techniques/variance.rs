@@ -24,13 +24,13 @@
 //! the shadow lightens. Reduction darkens penumbrae. Point-light cube faces filter up to
 //! their own edges only.
 
-use super::filtering::{check_map_size, FilterSettings, FilteredMaps};
+use super::filtering::{check_map_size, DepthRange, FilterSettings, FilteredMaps};
 use super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
 use super::{
     check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
 };
 use crate::error::Result;
-use crate::raster::NO_TRIANGLE;
+use crate::raster::{DepthBuffer, NO_TRIANGLE};
 use std::collections::BTreeMap;
 
 /// Default floor on the variance, in normalized depth squared (σ ≥ 10⁻³ of the depth
@@ -96,6 +96,34 @@ pub fn chebyshev(d: f32, mean: f32, second: f32, min_variance: f32, reduction: f
     }
 }
 
+/// The normalized depth of texel `(x, y)` of `m` and the variance of the depth across the
+/// texel, `¼((∂z/∂x)² + (∂z/∂y)²)`, from the depth change to the neighbouring texel on the
+/// same triangle (0 across silhouettes, where it is not defined); see the module doc.
+pub fn texel_depth_and_variance(m: &DepthBuffer, r: &DepthRange, x: u32, y: u32) -> (f32, f32) {
+    let w = m.width;
+    let k = (y * w + x) as usize;
+    let z = r.normalize(m.depth[k]);
+    let id = m.id[k];
+    // Depth change per texel on this texel's own triangle, towards whichever neighbour
+    // shares it.
+    let slope = |nb: Option<usize>, other: Option<usize>| -> f32 {
+        for (j, sign) in [(nb, 1.0f32), (other, -1.0)] {
+            if let Some(j) = j {
+                if id != NO_TRIANGLE && m.id[j] == id {
+                    return sign * (r.normalize(m.depth[j]) - z);
+                }
+            }
+        }
+        0.0
+    };
+    let dx = slope((x + 1 < w).then(|| k + 1), (x > 0).then(|| k - 1));
+    let dy = slope(
+        (y + 1 < m.height).then(|| k + w as usize),
+        (y > 0).then(|| k - w as usize),
+    );
+    (z, 0.25 * (dx * dx + dy * dy))
+}
+
 impl ShadowTechnique for Variance {
     fn name(&self) -> &'static str {
         "vsm"
@@ -146,29 +174,9 @@ impl ShadowTechnique for Variance {
             &self.filtering,
             &mut stats,
             |m, r, x, y, out| {
-                let w = m.width;
-                let k = (y * w + x) as usize;
-                let z = r.normalize(m.depth[k]);
-                let id = m.id[k];
-                // Depth change per texel on this texel's own triangle, towards whichever
-                // neighbour shares it (0 across silhouettes, where it is not defined).
-                let slope = |nb: Option<usize>, other: Option<usize>| -> f32 {
-                    for (j, sign) in [(nb, 1.0f32), (other, -1.0)] {
-                        if let Some(j) = j {
-                            if id != NO_TRIANGLE && m.id[j] == id {
-                                return sign * (r.normalize(m.depth[j]) - z);
-                            }
-                        }
-                    }
-                    0.0
-                };
-                let dx = slope((x + 1 < w).then(|| k + 1), (x > 0).then(|| k - 1));
-                let dy = slope(
-                    (y + 1 < m.height).then(|| k + w as usize),
-                    (y > 0).then(|| k - w as usize),
-                );
+                let (z, var) = texel_depth_and_variance(m, r, x, y);
                 out[0] = z;
-                out[1] = z * z + 0.25 * (dx * dx + dy * dy);
+                out[1] = z * z + var;
             },
         );
         let (min_var, reduction) = (self.min_variance, self.bleed_reduction);

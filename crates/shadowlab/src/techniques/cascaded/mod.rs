@@ -1,0 +1,440 @@
+//! `cascaded`: cascaded shadow maps for directional lights (Engel, "Cascaded Shadow Maps",
+//! ShaderX⁵ 2006; Dimitrov, "Cascaded Shadow Maps", NVIDIA 2007; Zhang et al.'s
+//! parallel-split shadow maps).
+//!
+//! The idea: split the view depth range into `N` slices with the practical split scheme
+//! ([`splits`]) and give each slice its own orthographic shadow map fitted to it in light
+//! space ([`fit`]), so near slices get small maps with fine texels and far ones large maps
+//! with coarse texels — the texel density falls with the distance as the image's does. A
+//! receiver reads the cascade of its view depth, with PCF inside it, and blends into the
+//! next cascade across a band at the slice's far end so the change of resolution does not
+//! show as a seam.
+//!
+//! Memory: unless `cascade-resolution` is set, each cascade is `⌊resolution/√N⌋²`, so all
+//! cascades together hold (at most) the texels of one `resolution²` map: four cascades of
+//! 1024² against one 2048² map. Depth bounds: the camera's near and far planes, or
+//! (`depth-bounds=sdsm`, sample distribution shadow maps, Lauritzen et al. 2011) the
+//! nearest and farthest view depth of the receivers this frame shows that the light can
+//! reach, read from the camera pass.
+//!
+//! Invariants: every cascade's depth range holds every caster between its slice and the
+//! light; with `stabilize`, each cascade's window is the same size for every camera
+//! orientation and moves by whole texels of a world-fixed light basis; biases are `sm`'s,
+//! in texels of the cascade that is read. Departures: spot and point lights have no
+//! cascades (their frusta are not sliced by engines either): they fall back to one
+//! `resolution²` map (a cube of six for point lights) with the same PCF and biases, and the
+//! counter `single_map_fallback` says so. SDSM here takes only the depth bounds (not the
+//! paper's tight light-space rectangles per partition). Known artifacts: the usual
+//! shadow-map acne and peter-panning at the bias trade-off; the blend band shows softer
+//! shadow edges; SDSM bounds change with the view, which undoes stabilization's texel
+//! snapping when the visible depth range changes.
+
+pub mod fit;
+pub mod splits;
+
+use super::shadow_map::{
+    check_light_map_size, check_resolution, lookup_nearest, lookup_pcf, receiver_bias,
+    render_depth_map, ShadowMap, DEFAULT_CONSTANT_BIAS, DEFAULT_PCF_KERNEL, DEFAULT_RESOLUTION,
+    DEFAULT_SLOPE_BIAS,
+};
+use super::{
+    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
+};
+use crate::error::{Error, Result};
+use crate::light::{Light, LightView};
+use crate::math::Vec3;
+use crate::raster::DepthBuffer;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+
+/// Default number of cascades: engines' usual four.
+pub const DEFAULT_CASCADES: usize = 4;
+/// The most cascades accepted.
+pub const MAX_CASCADES: usize = 8;
+/// Default λ of the practical split scheme: mostly logarithmic (the density the image
+/// needs), with a uniform share so the nearest cascade is not spent on a sliver.
+pub const DEFAULT_LAMBDA: f32 = 0.75;
+/// Default blend band: the last tenth of each slice blends into the next cascade.
+pub const DEFAULT_BLEND: f32 = 0.1;
+
+/// Where the cascades' depth range comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthBounds {
+    /// The camera's near and far planes.
+    Camera,
+    /// The nearest and farthest lit receiver of the camera pass (SDSM).
+    Sdsm,
+}
+
+/// The `cascaded` technique.
+#[derive(Clone, Debug)]
+pub struct Cascaded {
+    /// Side of the one map whose memory the cascades share.
+    pub resolution: u32,
+    /// Number of cascades.
+    pub cascades: usize,
+    /// Side of each cascade's map; 0 (`auto`) for the share of `resolution²`.
+    pub cascade_resolution: u32,
+    /// λ of the practical split scheme.
+    pub lambda: f32,
+    /// Texel-snapped, rotation-invariant windows.
+    pub stabilize: bool,
+    /// Share of each slice's depth range, at its far end, blended into the next cascade.
+    pub blend: f32,
+    /// Depth range the slices split.
+    pub depth_bounds: DepthBounds,
+    /// Constant bias in texels (as `sm`'s).
+    pub bias: f32,
+    /// Slope-scaled bias in texels per unit of tan θ (as `sm`'s).
+    pub slope_bias: f32,
+    /// PCF kernel side (0 for unfiltered look-ups).
+    pub kernel: u32,
+}
+
+impl Default for Cascaded {
+    fn default() -> Self {
+        Cascaded {
+            resolution: DEFAULT_RESOLUTION,
+            cascades: DEFAULT_CASCADES,
+            cascade_resolution: 0,
+            lambda: DEFAULT_LAMBDA,
+            stabilize: true,
+            blend: DEFAULT_BLEND,
+            depth_bounds: DepthBounds::Sdsm,
+            bias: DEFAULT_CONSTANT_BIAS,
+            slope_bias: DEFAULT_SLOPE_BIAS,
+            kernel: DEFAULT_PCF_KERNEL,
+        }
+    }
+}
+
+const KEYS: &[&str] = &[
+    "resolution",
+    "cascades",
+    "cascade-resolution",
+    "lambda",
+    "stabilize",
+    "blend",
+    "depth-bounds",
+    "bias",
+    "slope-bias",
+    "kernel",
+];
+
+/// One cascade: its view depth interval, light view and map.
+pub struct Cascade {
+    /// View depths `[d0, d1)` the cascade covers.
+    pub slice: (f32, f32),
+    /// The light view.
+    pub view: LightView,
+    /// The depth map.
+    pub map: DepthBuffer,
+}
+
+impl Cascaded {
+    /// The side of each cascade's map.
+    pub fn resolved_cascade_resolution(&self) -> u32 {
+        if self.cascade_resolution > 0 {
+            self.cascade_resolution
+        } else {
+            ((self.resolution as f64 / (self.cascades as f64).sqrt()).floor() as u32).max(1)
+        }
+    }
+
+    /// The view depth interval the slices split this frame.
+    pub fn depth_interval(&self, frame: &Frame) -> (f32, f32) {
+        let cam = frame.camera;
+        let camera = (cam.near, cam.far);
+        if self.depth_bounds == DepthBounds::Camera {
+            return camera;
+        }
+        let f = cam.forward();
+        let view = frame.view;
+        let (lo, hi) = (0..view.position.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .filter(|&k| frame.receiver_lit(k))
+            .map(|k| {
+                let z = (view.position[k] - cam.eye).dot(f);
+                (z, z)
+            })
+            .reduce(
+                || (f32::INFINITY, f32::NEG_INFINITY),
+                |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            );
+        if !(lo.is_finite() && hi.is_finite()) || hi <= lo {
+            return camera;
+        }
+        // A little room so the extreme receivers are inside their slices.
+        let pad = (hi - lo) * fit::DEPTH_PAD;
+        ((lo - pad).max(cam.near), hi + pad)
+    }
+
+    /// The cascades of a frame lit by a directional light towards `to_light`.
+    pub fn build(&self, frame: &Frame, to_light: Vec3, stats: &mut Stats) -> Vec<Cascade> {
+        let (near, far) = self.depth_interval(frame);
+        let planes = splits::practical_splits(near, far, self.cascades, self.lambda);
+        let res = self.resolved_cascade_resolution();
+        let basis = fit::light_basis(to_light, &frame.scene.bounds);
+        let views: Vec<(f32, f32, LightView)> = planes
+            .windows(2)
+            .map(|w| {
+                let s = (w[0], w[1]);
+                let win = fit::fit_window(
+                    frame.camera,
+                    &basis,
+                    &frame.scene.bounds,
+                    s,
+                    res,
+                    self.stabilize,
+                );
+                (
+                    s.0,
+                    s.1,
+                    fit::cascade_view(frame.camera, &basis, &frame.scene.bounds, s, &win),
+                )
+            })
+            .collect();
+        for (i, p) in planes.iter().enumerate() {
+            stats.count(&format!("split{i}"), *p as f64);
+        }
+        stats.stage("shadow_map", || {
+            views
+                .into_iter()
+                .map(|(d0, d1, view)| Cascade {
+                    slice: (d0, d1),
+                    map: render_depth_map(frame.scene, &view, res),
+                    view,
+                })
+                .collect()
+        })
+    }
+
+    /// The lit fraction of receiver `k` read from cascade `c`.
+    fn read(&self, frame: &Frame, c: &Cascade, k: usize, slope: f32) -> f32 {
+        let view = frame.view;
+        let p = view.position[k];
+        let s = c.view.project(p);
+        let (l, _) = frame.light.shadow_ray(p);
+        let d = s.depth
+            - receiver_bias(
+                c.view.texel_size(c.map.width, s.depth),
+                view.normal[k],
+                l,
+                self.bias,
+                slope,
+            );
+        if !(s.u.is_finite() && s.v.is_finite() && d.is_finite()) {
+            return 1.0;
+        }
+        if self.kernel == 0 {
+            lookup_nearest(&c.map, s.u, s.v, d)
+        } else {
+            lookup_pcf(&c.map, s.u, s.v, d, self.kernel)
+        }
+    }
+
+    /// The shadow term of every pixel from the cascades, and each pixel's cascade (255 where
+    /// none was read).
+    fn lookup(&self, frame: &Frame, cascades: &[Cascade]) -> (Vec<Vec3>, Vec<u8>) {
+        let view = frame.view;
+        let cam = frame.camera;
+        let f = cam.forward();
+        let slope = if self.kernel > 0 {
+            self.slope_bias * (self.kernel / 2 + 1) as f32
+        } else {
+            self.slope_bias
+        };
+        let bounds: Vec<f32> = std::iter::once(cascades[0].slice.0)
+            .chain(cascades.iter().map(|c| c.slice.1))
+            .collect();
+        let blend = self.blend;
+        (0..view.position.len())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|k| {
+                if !frame.receiver_lit(k) {
+                    let v = if view.covered(k) {
+                        Vec3::ZERO
+                    } else {
+                        Vec3::ONE
+                    };
+                    return (v, u8::MAX);
+                }
+                let z = (view.position[k] - cam.eye).dot(f);
+                let i = splits::cascade_of(&bounds, z);
+                let mut lit = self.read(frame, &cascades[i], k, slope);
+                let (d0, d1) = cascades[i].slice;
+                let band = blend * (d1 - d0);
+                if i + 1 < cascades.len() && band > 0.0 && z > d1 - band {
+                    let t = ((z - (d1 - band)) / band).min(1.0);
+                    lit += t * (self.read(frame, &cascades[i + 1], k, slope) - lit);
+                }
+                (Vec3::splat(lit), i as u8)
+            })
+            .unzip()
+    }
+
+    fn fallback(&self, frame: &Frame) -> Result<Shadows> {
+        let mut sm = if self.kernel > 0 {
+            ShadowMap::pcf()
+        } else {
+            ShadowMap::standard()
+        };
+        sm.resolution = self.resolution;
+        sm.bias = self.bias;
+        sm.slope_bias = self.slope_bias;
+        if self.kernel > 0 {
+            sm.kernel = self.kernel;
+        }
+        let mut s = sm.render(frame)?;
+        s.stats.count("single_map_fallback", 1.0);
+        Ok(s)
+    }
+}
+
+/// Colours of the cascades in the `--dump` overlay.
+const CASCADE_COLOURS: [[f32; 3]; MAX_CASCADES] = [
+    [1.0, 0.3, 0.3],
+    [0.3, 1.0, 0.3],
+    [0.3, 0.4, 1.0],
+    [1.0, 1.0, 0.3],
+    [1.0, 0.3, 1.0],
+    [0.3, 1.0, 1.0],
+    [1.0, 0.6, 0.2],
+    [0.7, 0.7, 0.7],
+];
+
+fn dump(
+    dir: &std::path::Path,
+    frame: &Frame,
+    cascades: &[Cascade],
+    which: &[u8],
+    vis: &[Vec3],
+) -> Result<()> {
+    for (i, c) in cascades.iter().enumerate() {
+        crate::shade::write_depth_png(&dir.join(format!("cascaded-map{i}.png")), &c.map)?;
+    }
+    let (w, h) = (frame.view.width, frame.view.height);
+    let img = image::RgbImage::from_fn(w, h, |x, y| {
+        let k = (y * w + x) as usize;
+        let base = match which[k] {
+            u8::MAX => [0.15; 3],
+            i => CASCADE_COLOURS[i as usize % MAX_CASCADES],
+        };
+        let s = 0.35 + 0.65 * vis[k].x;
+        image::Rgb(base.map(|c| (c * s * 255.0) as u8))
+    });
+    crate::shade::save_png(&img, &dir.join("cascaded-overlay.png"))
+}
+
+impl ShadowTechnique for Cascaded {
+    fn name(&self) -> &'static str {
+        "cascaded"
+    }
+
+    fn params(&self) -> BTreeMap<String, serde_json::Value> {
+        BTreeMap::from([
+            ("resolution".to_string(), self.resolution.into()),
+            ("cascades".to_string(), self.cascades.into()),
+            (
+                "cascade-resolution".to_string(),
+                self.resolved_cascade_resolution().into(),
+            ),
+            ("lambda".to_string(), self.lambda.into()),
+            ("stabilize".to_string(), self.stabilize.into()),
+            ("blend".to_string(), self.blend.into()),
+            (
+                "depth-bounds".to_string(),
+                match self.depth_bounds {
+                    DepthBounds::Camera => "camera",
+                    DepthBounds::Sdsm => "sdsm",
+                }
+                .into(),
+            ),
+            ("bias".to_string(), self.bias.into()),
+            ("slope-bias".to_string(), self.slope_bias.into()),
+            ("kernel".to_string(), self.kernel.into()),
+        ])
+    }
+
+    fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
+        let t = "cascaded";
+        match key {
+            "resolution" => self.resolution = check_resolution(t, parse_value(t, key, value)?)?,
+            "cascades" => {
+                self.cascades = check_range(t, key, parse_value(t, key, value)?, 1, MAX_CASCADES)?
+            }
+            "cascade-resolution" => {
+                // `auto`: the share of `resolution²`; a number is checked like any map side.
+                self.cascade_resolution = if value.trim() == "auto" {
+                    0
+                } else {
+                    let r = parse_value(t, key, value)?;
+                    check_range(t, key, r, 1, crate::raster::MAX_RASTER_SIDE)?
+                };
+            }
+            "lambda" => self.lambda = check_range(t, key, parse_value(t, key, value)?, 0.0, 1.0)?,
+            "stabilize" => {
+                self.stabilize = match value.trim() {
+                    "true" | "on" | "yes" | "1" => true,
+                    "false" | "off" | "no" | "0" => false,
+                    _ => {
+                        return Err(Error::param(format!(
+                            "parameter cascaded.stabilize = {value:?} is not true or false"
+                        )))
+                    }
+                }
+            }
+            "blend" => self.blend = check_range(t, key, parse_value(t, key, value)?, 0.0, 0.5)?,
+            "depth-bounds" => {
+                self.depth_bounds = match value.trim() {
+                    "camera" => DepthBounds::Camera,
+                    "sdsm" => DepthBounds::Sdsm,
+                    _ => {
+                        return Err(Error::param(format!(
+                            "parameter cascaded.depth-bounds = {value:?} is not camera or sdsm"
+                        )))
+                    }
+                }
+            }
+            "bias" => self.bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?,
+            "slope-bias" => {
+                self.slope_bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?
+            }
+            "kernel" => self.kernel = check_range(t, key, parse_value(t, key, value)?, 0, 15)?,
+            _ => return Err(unknown_param(t, key, KEYS)),
+        }
+        Ok(())
+    }
+
+    fn render(&mut self, frame: &Frame) -> Result<Shadows> {
+        check_resolution("cascaded", self.resolution)?;
+        let Light::Directional { to_light } = *frame.light else {
+            return self.fallback(frame);
+        };
+        let res = check_resolution("cascaded", self.resolved_cascade_resolution())?;
+        check_light_map_size("cascaded", self.cascades, res)?;
+        let mut stats = Stats::default();
+        let cascades = self.build(frame, to_light, &mut stats);
+        let (value, which) = stats.stage("lookup", || self.lookup(frame, &cascades));
+        stats.memory_bytes = cascades.iter().map(|c| c.map.depth.len() as u64 * 4).sum();
+        stats.count("cascades", cascades.len() as f64);
+        stats.count("cascade_resolution", res as f64);
+        stats.count(
+            "map_texels",
+            cascades.iter().map(|c| c.map.depth.len() as f64).sum(),
+        );
+        if let Some(dir) = frame.dump_dir {
+            dump(dir, frame, &cascades, &which, &value)?;
+        }
+        Ok(Shadows::new(
+            Visibility {
+                width: frame.view.width,
+                height: frame.view.height,
+                value,
+            },
+            stats,
+        ))
+    }
+}
