@@ -187,21 +187,21 @@ fn random_triangles_keep_total_area_constant() {
 }
 
 #[test]
-fn a_million_random_triangles_generate_quickly() {
+fn a_million_random_triangles_generate() {
+    // Its speed is `bench`'s business; this checks the count and that every vertex is
+    // finite and inside the scene's bounds.
     let p = params(&[("count", "1000000")]);
     let t = Instant::now();
     let s = builtin::generate("random-triangles", &p).unwrap();
-    let secs = t.elapsed().as_secs_f64();
     eprintln!(
-        "random-triangles count=1000000: {} triangles in {secs:.3} s",
-        s.len()
+        "random-triangles count=1000000: {} triangles in {:.3} s",
+        s.len(),
+        t.elapsed().as_secs_f64()
     );
     assert_eq!(s.len(), 1_000_002);
-    if !cfg!(debug_assertions) {
-        assert!(
-            secs < 1.0,
-            "generating a million random triangles took {secs:.2} s"
-        );
+    s.validate().unwrap();
+    for v in s.v0.iter().chain(&s.v1).chain(&s.v2) {
+        assert!(v.is_finite() && s.bounds.min.cmple(*v).all() && v.cmple(s.bounds.max).all());
     }
 }
 
