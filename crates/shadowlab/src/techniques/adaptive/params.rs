@@ -1,0 +1,234 @@
+//! The parameters of adaptive shadow maps (Fernando et al. 2001): the tree's shape (the
+//! starting resolution of Section 5, the tiles and cells of Section 3), the memory limit of
+//! Section 3.2, the analysed share of Section 4.3, the time limit and cost terms of
+//! Section 3.1, and the bias of Section 4.2's depth comparison.
+
+use crate::error::{Error, Result};
+use crate::raster;
+use crate::techniques::shadow_map::{DEFAULT_CONSTANT_BIAS, DEFAULT_SLOPE_BIAS};
+use crate::techniques::{check_range, parse_value, unknown_param};
+use std::collections::BTreeMap;
+
+/// Default side of a root node's tile in texels (the paper's starting resolution).
+pub const DEFAULT_ROOT_RESOLUTION: u32 = 512;
+/// Default side of every other node's tile in texels.
+pub const DEFAULT_TILE_RESOLUTION: u32 = 32;
+/// Default number of cells per side of a node: each level refines texels by this factor.
+pub const DEFAULT_CELLS: u32 = 4;
+/// Default memory budget in MiB (the paper's 16 MB, the size of a 2048² map of 32-bit depths).
+pub const DEFAULT_BUDGET_MB: f64 = 16.0;
+/// Default share of eye pixels analysed per frame (the paper's one eighth).
+pub const DEFAULT_ANALYSIS_FRACTION: f64 = 0.125;
+/// Default per-frame budget for new nodes, in the cost model's (nominal) milliseconds.
+pub const DEFAULT_TIME_BUDGET_MS: f64 = 40.0;
+/// Default cost of a new tile per texel in the cost model (`a`), in nominal nanoseconds:
+/// a fixed unit, not a measurement, so that the refinement budget (`time-budget-ms`) buys
+/// the same nodes on any machine and under any load and a frame's result depends on its
+/// inputs alone. The value is about what a 32² tile costs per texel on a 2-core machine;
+/// `cost-per-texel-ns=auto` measures this machine instead (and gives up determinism).
+pub const DEFAULT_COST_PER_TEXEL_NS: f64 = 50.0;
+/// Default fixed cost of a new tile in the cost model (`b`), in nominal milliseconds (see
+/// [`DEFAULT_COST_PER_TEXEL_NS`]); `cost-per-tile-ms=auto` measures it.
+pub const DEFAULT_COST_PER_TILE_MS: f64 = 0.2;
+/// Default cap on new nodes per frame.
+pub const DEFAULT_MAX_NEW_NODES: u32 = 1024;
+/// Default number of refinement passes per frame (the paper makes one): each further pass
+/// examines again the pixels whose cells were just refined, in the new nodes, so a view
+/// reaches its resolution in fewer frames.
+pub const DEFAULT_PASSES: u32 = 4;
+/// Default linear ratio of shadow-map to eye resolution that refinement aims for. Larger
+/// values put shadow edges closer to where a ray-traced reference puts them and spend more
+/// memory and time; 1 is the paper's criterion.
+pub const DEFAULT_OVERSAMPLING: f32 = 16.0;
+/// Bytes per MiB, the unit of `budget-mb`.
+pub(super) const MIB: f64 = 1024.0 * 1024.0;
+
+/// The technique's parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct Params {
+    pub(super) root_resolution: u32,
+    pub(super) tile_resolution: u32,
+    pub(super) cells: u32,
+    pub(super) budget_mb: f64,
+    pub(super) analysis_fraction: f64,
+    pub(super) time_budget_ms: Option<f64>,
+    pub(super) max_new_nodes: u32,
+    pub(super) passes: u32,
+    pub(super) oversampling: f32,
+    pub(super) bias: f32,
+    pub(super) slope_bias: f32,
+    pub(super) cost_per_texel_ns: Option<f64>,
+    pub(super) cost_per_tile_ms: Option<f64>,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            root_resolution: DEFAULT_ROOT_RESOLUTION,
+            tile_resolution: DEFAULT_TILE_RESOLUTION,
+            cells: DEFAULT_CELLS,
+            budget_mb: DEFAULT_BUDGET_MB,
+            analysis_fraction: DEFAULT_ANALYSIS_FRACTION,
+            time_budget_ms: Some(DEFAULT_TIME_BUDGET_MS),
+            max_new_nodes: DEFAULT_MAX_NEW_NODES,
+            passes: DEFAULT_PASSES,
+            oversampling: DEFAULT_OVERSAMPLING,
+            bias: DEFAULT_CONSTANT_BIAS,
+            slope_bias: DEFAULT_SLOPE_BIAS,
+            cost_per_texel_ns: Some(DEFAULT_COST_PER_TEXEL_NS),
+            cost_per_tile_ms: Some(DEFAULT_COST_PER_TILE_MS),
+        }
+    }
+}
+
+const KNOWN: &[&str] = &[
+    "root-resolution",
+    "tile-resolution",
+    "cells",
+    "budget-mb",
+    "analysis-fraction",
+    "time-budget-ms",
+    "max-new-nodes",
+    "passes",
+    "oversampling",
+    "bias",
+    "slope-bias",
+    "cost-per-texel-ns",
+    "cost-per-tile-ms",
+];
+
+impl Params {
+    /// Side of a root tile for a light with `views` views.
+    pub(super) fn face_resolution(&self, views: usize) -> u32 {
+        if views > 1 {
+            (self.root_resolution / 2).max(1)
+        } else {
+            self.root_resolution
+        }
+    }
+
+    /// The memory budget in bytes.
+    pub(super) fn budget_bytes(&self) -> u64 {
+        (self.budget_mb * MIB) as u64
+    }
+
+    /// Checks the parameters that constrain one another.
+    pub(super) fn check_structure(&self, views: usize) -> Result<()> {
+        let face = self.face_resolution(views);
+        let cell = self.tile_resolution / self.cells;
+        if cell == 0 || cell * self.cells != self.tile_resolution {
+            return Err(Error::param(format!(
+                "asm.cells = {} must divide asm.tile-resolution = {}",
+                self.cells, self.tile_resolution
+            )));
+        }
+        if face < cell || face / cell * cell != face {
+            return Err(Error::param(format!(
+                "asm.root-resolution = {} gives root tiles of {face} texels, which the cells of {cell} texels \
+                 (asm.tile-resolution / asm.cells) must divide",
+                self.root_resolution
+            )));
+        }
+        Ok(())
+    }
+
+    /// True when `other` differs in a parameter the tree's shape depends on.
+    pub(super) fn reshapes(&self, other: &Params) -> bool {
+        other.root_resolution != self.root_resolution
+            || other.tile_resolution != self.tile_resolution
+            || other.cells != self.cells
+    }
+
+    /// The parameters by key, as `ShadowTechnique::params` lists them.
+    pub(super) fn to_map(&self) -> BTreeMap<String, serde_json::Value> {
+        let p = self;
+        let opt = |v: Option<f64>, word: &str| {
+            v.map_or(serde_json::Value::from(word), serde_json::Value::from)
+        };
+        BTreeMap::from([
+            ("root-resolution".to_string(), p.root_resolution.into()),
+            ("tile-resolution".to_string(), p.tile_resolution.into()),
+            ("cells".to_string(), p.cells.into()),
+            ("budget-mb".to_string(), p.budget_mb.into()),
+            ("analysis-fraction".to_string(), p.analysis_fraction.into()),
+            ("time-budget-ms".to_string(), opt(p.time_budget_ms, "none")),
+            ("max-new-nodes".to_string(), p.max_new_nodes.into()),
+            ("passes".to_string(), p.passes.into()),
+            ("oversampling".to_string(), p.oversampling.into()),
+            ("bias".to_string(), p.bias.into()),
+            ("slope-bias".to_string(), p.slope_bias.into()),
+            (
+                "cost-per-texel-ns".to_string(),
+                opt(p.cost_per_texel_ns, "auto"),
+            ),
+            (
+                "cost-per-tile-ms".to_string(),
+                opt(p.cost_per_tile_ms, "auto"),
+            ),
+        ])
+    }
+
+    /// Sets `key` to `value`, checked; on an error `self` is unchanged.
+    pub(super) fn set(&mut self, key: &str, value: &str) -> Result<()> {
+        let t = "asm";
+        let p = self;
+        match key {
+            "root-resolution" => {
+                p.root_resolution = power_of_two(key, value, 16, raster::MAX_RASTER_SIDE)?
+            }
+            "tile-resolution" => p.tile_resolution = power_of_two(key, value, 8, 2048)?,
+            "cells" => p.cells = power_of_two(key, value, 2, 64)?,
+            "budget-mb" => {
+                p.budget_mb = check_range(t, key, parse_value(t, key, value)?, 0.01, 1.0e6)?
+            }
+            "analysis-fraction" => {
+                let f: f64 = parse_value(t, key, value)?;
+                if !(f > 0.0 && f <= 1.0) {
+                    return Err(Error::param(format!(
+                        "parameter asm.{key} = {value} is outside its range (0, 1]"
+                    )));
+                }
+                p.analysis_fraction = f;
+            }
+            "time-budget-ms" => p.time_budget_ms = parse_optional(key, value, "none", 0.0, 1.0e7)?,
+            "max-new-nodes" => {
+                p.max_new_nodes = check_range(t, key, parse_value(t, key, value)?, 0, 1_000_000)?
+            }
+            "passes" => p.passes = check_range(t, key, parse_value(t, key, value)?, 1, 64)?,
+            "oversampling" => {
+                p.oversampling = check_range(t, key, parse_value(t, key, value)?, 0.01, 1024.0)?
+            }
+            "bias" => p.bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?,
+            "slope-bias" => {
+                p.slope_bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?
+            }
+            "cost-per-texel-ns" => {
+                p.cost_per_texel_ns = parse_optional(key, value, "auto", 0.0, 1.0e9)?
+            }
+            "cost-per-tile-ms" => {
+                p.cost_per_tile_ms = parse_optional(key, value, "auto", 0.0, 1.0e7)?
+            }
+            _ => return Err(unknown_param(t, key, KNOWN)),
+        }
+        Ok(())
+    }
+}
+
+/// Parses `none` (or `auto` for cost terms) or a number in `lo..=hi`.
+fn parse_optional(key: &str, value: &str, word: &str, lo: f64, hi: f64) -> Result<Option<f64>> {
+    if value.trim().eq_ignore_ascii_case(word) {
+        return Ok(None);
+    }
+    let v: f64 = parse_value("asm", key, value)?;
+    Ok(Some(check_range("asm", key, v, lo, hi)?))
+}
+
+fn power_of_two(key: &str, value: &str, lo: u32, hi: u32) -> Result<u32> {
+    let v: u32 = check_range("asm", key, parse_value("asm", key, value)?, lo, hi)?;
+    if !v.is_power_of_two() {
+        return Err(Error::param(format!(
+            "parameter asm.{key} = {v} must be a power of two"
+        )));
+    }
+    Ok(v)
+}
