@@ -7,8 +7,8 @@
 
 use super::params::Params;
 use super::tree::{floor_i64, uv_of, Node, Tree, NO_NODE};
+use crate::frame::Frame;
 use crate::math::Vec3;
-use crate::techniques::Frame;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 

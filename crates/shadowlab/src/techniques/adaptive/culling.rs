@@ -5,7 +5,7 @@
 
 use super::tree::{Face, Square, Tree, MAX_EFFECTIVE_RESOLUTION, NO_NODE};
 use crate::light::LightView;
-use crate::math::Vec4;
+use crate::math::{ndc_to_uv, Vec4};
 use crate::scene::Scene;
 use rayon::prelude::*;
 
@@ -79,8 +79,7 @@ fn clipped_uv_bounds(c: [Vec4; 3]) -> Option<[f32; 4]> {
                 f32::INFINITY,
             ]);
         }
-        let u = p.x / p.w * 0.5 + 0.5;
-        let v = 0.5 - p.y / p.w * 0.5;
+        let (u, v) = ndc_to_uv(*p);
         r = [r[0].min(u), r[1].min(v), r[2].max(u), r[3].max(v)];
     }
     (n >= 3).then_some(r)

@@ -2,8 +2,10 @@
 //! light view, the root's depth map, and the outlines of the nodes over the root map,
 //! coloured by level.
 
-use super::tree::Tree;
+use super::tree::{Face, Tree};
 use crate::error::Result;
+use crate::frame::Frame;
+use crate::picture::{outline_rect, RgbImage};
 use crate::raster::DepthBuffer;
 
 /// Side of the tree picture in pixels.
@@ -19,9 +21,9 @@ const LEVEL_COLOURS: [[u8; 3]; 6] = [
     [230, 80, 230],
 ];
 
-/// Writes `asm-face{f}-root.png` (the root's depths) and `asm-face{f}-tree.png` (the
-/// node outlines) for every light view `f` with a root.
-pub(super) fn write_dump(tree: &Tree, dir: &std::path::Path) -> Result<()> {
+/// Hands `asm-face{f}-root.png` (the root's depths) and `asm-face{f}-tree.png` (the
+/// node outlines) for every light view `f` with a root to `frame`'s dump sink.
+pub(super) fn write_dump(tree: &Tree, frame: &Frame) -> Result<()> {
     for (f, face) in tree.faces.iter().enumerate() {
         let Some(face) = face else { continue };
         let root = tree.node(face.root);
@@ -31,40 +33,40 @@ pub(super) fn write_dump(tree: &Tree, dir: &std::path::Path) -> Result<()> {
             depth: root.depth.clone(),
             id: root.id.clone(),
         };
-        crate::shade::write_depth_png(&dir.join(format!("asm-face{f}-root.png")), &map)?;
-        // The tile tree: node outlines over the root map, brighter for deeper levels.
-        let mut img = crate::shade::RgbImage::from_fn(SIDE, SIDE, |x, y| {
-            let tx = (x as u64 * root.res as u64 / SIDE as u64) as u32;
-            let ty = (y as u64 * root.res as u64 / SIDE as u64) as u32;
-            let g = if root.depth[(ty * root.res + tx) as usize].is_finite() {
-                60
-            } else {
-                20
-            };
-            image::Rgb([g, g, g])
-        });
-        for n in tree
-            .live_nodes()
-            .filter(|n| n.face as usize == f && n.level > 0)
-        {
-            let e = tree.scale(face, n.level);
-            let to_px = |t: u32| ((t as f64 / e) * SIDE as f64) as u32;
-            let (x0, y0) = (to_px(n.x0).min(SIDE - 1), to_px(n.y0).min(SIDE - 1));
-            let (x1, y1) = (
-                to_px(n.x0 + n.res).min(SIDE - 1),
-                to_px(n.y0 + n.res).min(SIDE - 1),
-            );
-            let c = LEVEL_COLOURS[(n.level as usize - 1) % LEVEL_COLOURS.len()];
-            for x in x0..=x1 {
-                img.put_pixel(x, y0, image::Rgb(c));
-                img.put_pixel(x, y1, image::Rgb(c));
-            }
-            for y in y0..=y1 {
-                img.put_pixel(x0, y, image::Rgb(c));
-                img.put_pixel(x1, y, image::Rgb(c));
-            }
-        }
-        crate::shade::save_png(&img, &dir.join(format!("asm-face{f}-tree.png")))?;
+        frame.dump_depth(&format!("asm-face{f}-root.png"), &map)?;
+        frame.dump_image(&format!("asm-face{f}-tree.png"), || {
+            tree_picture(tree, f, face)
+        })?;
     }
     Ok(())
+}
+
+/// The tile tree of light view `f`: node outlines over the root map, coloured by level.
+fn tree_picture(tree: &Tree, f: usize, face: &Face) -> RgbImage {
+    let root = tree.node(face.root);
+    let mut img = RgbImage::from_fn(SIDE, SIDE, |x, y| {
+        let tx = (x as u64 * root.res as u64 / SIDE as u64) as u32;
+        let ty = (y as u64 * root.res as u64 / SIDE as u64) as u32;
+        let g = if root.depth[(ty * root.res + tx) as usize].is_finite() {
+            60
+        } else {
+            20
+        };
+        image::Rgb([g, g, g])
+    });
+    for n in tree
+        .live_nodes()
+        .filter(|n| n.face as usize == f && n.level > 0)
+    {
+        let e = tree.scale(face, n.level);
+        let to_px = |t: u32| ((t as f64 / e) * SIDE as f64) as u32;
+        let (x0, y0) = (to_px(n.x0).min(SIDE - 1), to_px(n.y0).min(SIDE - 1));
+        let (x1, y1) = (
+            to_px(n.x0 + n.res).min(SIDE - 1),
+            to_px(n.y0 + n.res).min(SIDE - 1),
+        );
+        let c = LEVEL_COLOURS[(n.level as usize - 1) % LEVEL_COLOURS.len()];
+        outline_rect(&mut img, x0, y0, x1, y1, c);
+    }
+    img
 }

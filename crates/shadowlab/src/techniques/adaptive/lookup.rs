@@ -7,9 +7,9 @@
 
 use super::params::Params;
 use super::tree::{Face, Node, Tree, NO_NODE};
+use crate::frame::Frame;
 use crate::math::Vec3;
 use crate::techniques::shadow_map::receiver_bias;
-use crate::techniques::Frame;
 use rayon::prelude::*;
 
 impl Node {

@@ -130,8 +130,9 @@ pub use params::{
 pub use tree::MAX_EFFECTIVE_RESOLUTION;
 
 use super::shadow_map::DIRECTIONAL_PAD;
-use super::{Frame, ShadowTechnique, Shadows, Stats, Visibility};
+use super::technique::{ParamSpec, ShadowTechnique, Shadows};
 use crate::error::Result;
+use crate::frame::{Frame, Stats, Visibility};
 use crate::light::light_views;
 use cost::{cost_model, CostModel};
 use node_creation::Refinement;
@@ -267,6 +268,10 @@ impl ShadowTechnique for Adaptive {
         self.params.to_map()
     }
 
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        Params::specs()
+    }
+
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
         let mut p = self.params.clone();
         p.set(key, value)?;
@@ -330,18 +335,15 @@ impl ShadowTechnique for Adaptive {
             used_finest,
         };
         report(&mut stats, tree, &p, &tally);
-        if let Some(dir) = frame.dump_dir {
-            dump::write_dump(tree, dir)?;
+        if frame.dumping() {
+            dump::write_dump(tree, frame)?;
         }
-        Ok(Shadows {
-            visibility: Visibility {
-                width: frame.view.width,
-                height: frame.view.height,
-                value,
-            },
-            stats,
-            layers: None,
-        })
+        let visibility = Visibility {
+            width: frame.view.width,
+            height: frame.view.height,
+            value,
+        };
+        Ok(Shadows::new(visibility, stats))
     }
 }
 

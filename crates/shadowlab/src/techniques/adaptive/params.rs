@@ -6,7 +6,9 @@
 use crate::error::{Error, Result};
 use crate::raster;
 use crate::techniques::shadow_map::{DEFAULT_CONSTANT_BIAS, DEFAULT_SLOPE_BIAS};
-use crate::techniques::{check_range, parse_value, unknown_param};
+use crate::techniques::technique::{
+    check_range, find_param, parse_value, ParamRange, ParamSpec, BIAS, SLOPE_BIAS,
+};
 use std::collections::BTreeMap;
 
 /// Default side of a root node's tile in texels (the paper's starting resolution).
@@ -81,20 +83,74 @@ impl Default for Params {
     }
 }
 
-const KNOWN: &[&str] = &[
-    "root-resolution",
-    "tile-resolution",
-    "cells",
-    "budget-mb",
-    "analysis-fraction",
-    "time-budget-ms",
-    "max-new-nodes",
-    "passes",
-    "oversampling",
-    "bias",
-    "slope-bias",
-    "cost-per-texel-ns",
-    "cost-per-tile-ms",
+/// The technique's name in parameter errors.
+const T: &str = "asm";
+
+/// The parameter table, in the order `ShadowTechnique::params` lists the keys.
+const TABLE: &[ParamSpec] = &[
+    ParamSpec::real(
+        "analysis-fraction",
+        0.0,
+        1.0,
+        "share of the pixels analysed per frame (0 excluded), rounded to 1/n: the paper's 1/8",
+    ),
+    BIAS,
+    ParamSpec::real(
+        "budget-mb",
+        0.01,
+        1.0e6,
+        "MiB the tree of tiles may hold (the paper's memory limit)",
+    ),
+    ParamSpec::int(
+        "cells",
+        2,
+        64,
+        "cells per node side, a power of two dividing tile-resolution: the refinement per level",
+    ),
+    ParamSpec::real(
+        "cost-per-texel-ns",
+        0.0,
+        1.0e9,
+        "the cost model's a in nominal ns per texel, or auto to measure it at start-up",
+    ),
+    ParamSpec::real(
+        "cost-per-tile-ms",
+        0.0,
+        1.0e7,
+        "the cost model's b in nominal ms per tile, or auto to measure it at start-up",
+    ),
+    ParamSpec::int("max-new-nodes", 0, 1_000_000, "new nodes per frame at most"),
+    ParamSpec::real(
+        "oversampling",
+        0.01,
+        1024.0,
+        "texels wanted across an eye pixel's footprint, per axis (1 is the paper's criterion)",
+    ),
+    ParamSpec::int(
+        "passes",
+        1,
+        64,
+        "refinement passes per frame (1 is the paper's)",
+    ),
+    ParamSpec::int(
+        "root-resolution",
+        16,
+        raster::MAX_RASTER_SIDE as i64,
+        "side of a root tile in texels, a power of two; a point light's cube faces get half",
+    ),
+    SLOPE_BIAS,
+    ParamSpec::int(
+        "tile-resolution",
+        8,
+        2048,
+        "side of every non-root node's tile in texels, a power of two",
+    ),
+    ParamSpec::real(
+        "time-budget-ms",
+        0.0,
+        1.0e7,
+        "predicted ms of new tiles per frame in the cost model's units, or none for no limit",
+    ),
 ];
 
 impl Params {
@@ -168,21 +224,22 @@ impl Params {
         ])
     }
 
-    /// Sets `key` to `value`, checked; on an error `self` is unchanged.
+    /// The parameter table.
+    pub(super) fn specs() -> Vec<ParamSpec> {
+        TABLE.to_vec()
+    }
+
+    /// Sets `key` to `value`, checked against the table; on an error `self` is unchanged.
     pub(super) fn set(&mut self, key: &str, value: &str) -> Result<()> {
-        let t = "asm";
+        let spec = find_param(T, TABLE, key)?;
         let p = self;
         match key {
-            "root-resolution" => {
-                p.root_resolution = power_of_two(key, value, 16, raster::MAX_RASTER_SIDE)?
-            }
-            "tile-resolution" => p.tile_resolution = power_of_two(key, value, 8, 2048)?,
-            "cells" => p.cells = power_of_two(key, value, 2, 64)?,
-            "budget-mb" => {
-                p.budget_mb = check_range(t, key, parse_value(t, key, value)?, 0.01, 1.0e6)?
-            }
+            "root-resolution" => p.root_resolution = power_of_two(&spec, value)?,
+            "tile-resolution" => p.tile_resolution = power_of_two(&spec, value)?,
+            "cells" => p.cells = power_of_two(&spec, value)?,
+            "budget-mb" => p.budget_mb = real(&spec, value)?,
             "analysis-fraction" => {
-                let f: f64 = parse_value(t, key, value)?;
+                let f: f64 = parse_value(T, key, value)?;
                 if !(f > 0.0 && f <= 1.0) {
                     return Err(Error::param(format!(
                         "parameter asm.{key} = {value} is outside its range (0, 1]"
@@ -190,44 +247,52 @@ impl Params {
                 }
                 p.analysis_fraction = f;
             }
-            "time-budget-ms" => p.time_budget_ms = parse_optional(key, value, "none", 0.0, 1.0e7)?,
-            "max-new-nodes" => {
-                p.max_new_nodes = check_range(t, key, parse_value(t, key, value)?, 0, 1_000_000)?
+            "time-budget-ms" => p.time_budget_ms = optional(&spec, value, "none")?,
+            "max-new-nodes" => p.max_new_nodes = spec.u32(T, value)?,
+            "passes" => p.passes = spec.u32(T, value)?,
+            "oversampling" => p.oversampling = spec.f32(T, value)?,
+            "bias" => p.bias = spec.f32(T, value)?,
+            "slope-bias" => p.slope_bias = spec.f32(T, value)?,
+            "cost-per-texel-ns" => p.cost_per_texel_ns = optional(&spec, value, "auto")?,
+            "cost-per-tile-ms" => p.cost_per_tile_ms = optional(&spec, value, "auto")?,
+            _ => {
+                return Err(Error::Internal(format!(
+                    "asm.{key} is in the table but not read"
+                )))
             }
-            "passes" => p.passes = check_range(t, key, parse_value(t, key, value)?, 1, 64)?,
-            "oversampling" => {
-                p.oversampling = check_range(t, key, parse_value(t, key, value)?, 0.01, 1024.0)?
-            }
-            "bias" => p.bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?,
-            "slope-bias" => {
-                p.slope_bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?
-            }
-            "cost-per-texel-ns" => {
-                p.cost_per_texel_ns = parse_optional(key, value, "auto", 0.0, 1.0e9)?
-            }
-            "cost-per-tile-ms" => {
-                p.cost_per_tile_ms = parse_optional(key, value, "auto", 0.0, 1.0e7)?
-            }
-            _ => return Err(unknown_param(t, key, KNOWN)),
         }
         Ok(())
     }
 }
 
-/// Parses `none` (or `auto` for cost terms) or a number in `lo..=hi`.
-fn parse_optional(key: &str, value: &str, word: &str, lo: f64, hi: f64) -> Result<Option<f64>> {
+/// Parses a real parameter as `f64` (the table's reader parses `f32`, which would round
+/// the value), checking its range.
+fn real(spec: &ParamSpec, value: &str) -> Result<f64> {
+    let v: f64 = parse_value(T, spec.key, value)?;
+    match spec.range {
+        ParamRange::Real(lo, hi) => check_range(T, spec.key, v, lo, hi),
+        _ => Err(Error::Internal(format!(
+            "parameter asm.{} is read as a real number but its table says {}",
+            spec.key, spec.range
+        ))),
+    }
+}
+
+/// Parses `word` (`none`, or `auto` for cost terms) as `None`, else a real parameter.
+fn optional(spec: &ParamSpec, value: &str, word: &str) -> Result<Option<f64>> {
     if value.trim().eq_ignore_ascii_case(word) {
         return Ok(None);
     }
-    let v: f64 = parse_value("asm", key, value)?;
-    Ok(Some(check_range("asm", key, v, lo, hi)?))
+    real(spec, value).map(Some)
 }
 
-fn power_of_two(key: &str, value: &str, lo: u32, hi: u32) -> Result<u32> {
-    let v: u32 = check_range("asm", key, parse_value("asm", key, value)?, lo, hi)?;
+/// Parses an integer parameter that must be a power of two.
+fn power_of_two(spec: &ParamSpec, value: &str) -> Result<u32> {
+    let v = spec.u32(T, value)?;
     if !v.is_power_of_two() {
         return Err(Error::param(format!(
-            "parameter asm.{key} = {v} must be a power of two"
+            "parameter asm.{} = {v} must be a power of two",
+            spec.key
         )));
     }
     Ok(v)

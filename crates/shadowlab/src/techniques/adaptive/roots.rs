@@ -7,7 +7,7 @@ use super::node_creation::render_tile;
 use super::params::{Params, MIB};
 use super::tree::{Face, Node, RootTile, Square, Tree};
 use crate::error::{Error, Result};
-use crate::techniques::Frame;
+use crate::frame::Frame;
 use rayon::prelude::*;
 
 /// The root-view square of a whole view.

@@ -6,9 +6,9 @@
 //! root to the deepest node covering a point.
 
 use super::params::Params;
+use crate::frame::Frame;
 use crate::light::{cube_face, Light, LightView};
 use crate::math::{Aabb, Vec3};
-use crate::techniques::Frame;
 use glam::{DMat4, DVec4};
 
 /// Refinement stops at this effective resolution (texels across a root view): beyond it
