@@ -13,9 +13,9 @@
 use super::fit::frame_of;
 use super::fit::pick_up;
 use super::near_plane::Receivers;
+use crate::frame::Frame;
 use crate::light::Light;
 use crate::math::{Aabb, Vec3};
-use crate::techniques::Frame;
 use glam::DVec3;
 
 /// The box of visible receivers is widened by this fraction of the scene's diagonal on

@@ -10,10 +10,10 @@
 
 use super::post_space::PostLight;
 use super::Setup;
+use crate::frame::Frame;
 use crate::light::cube_face;
 use crate::math::Vec3;
 use crate::techniques::shadow_map::receiver_bias;
-use crate::techniques::Frame;
 use rayon::prelude::*;
 
 /// Per-pixel shadow test against the post-perspective maps.

@@ -4,8 +4,8 @@
 //! the visible receivers the light can reach give the near plane, the far plane and the
 //! box that bounds the body of Section 4.1.
 
+use crate::frame::Frame;
 use crate::math::Aabb;
-use crate::techniques::Frame;
 use rayon::prelude::*;
 
 /// The pushed near plane sits this fraction of the nearest visible depth in front of it

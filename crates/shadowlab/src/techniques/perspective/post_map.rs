@@ -15,9 +15,9 @@
 use super::fit::MapFit;
 use super::post_space::PostLight;
 use super::Setup;
+use crate::frame::Frame;
 use crate::math::{Mat4, Vec3, Vec4};
 use crate::raster::{self, SetupTriangle};
-use crate::techniques::Frame;
 use glam::DMat4;
 use rayon::prelude::*;
 
