@@ -5,7 +5,7 @@
 //! footprint and hand them to the technique's test ([`FilteredMaps::shade`]).
 
 use super::super::shadow_map::render_light_maps;
-use super::super::{Frame, Shadows, Stats, Visibility};
+use super::super::technique::Shadows;
 use super::depth_range::DepthRange;
 use super::footprint::light_footprint;
 use super::mip::MipChain;
@@ -14,8 +14,10 @@ use super::settings::FilterSettings;
 use super::texture::{chans, with_channels, Channel, Texture};
 use super::{light_view_index, view_count, PIXEL_CHUNK};
 use crate::error::{Error, Result};
+use crate::frame::{Frame, Stats, Visibility};
 use crate::light::LightView;
 use crate::math::Vec3;
+use crate::picture::RgbImage;
 use crate::raster::DepthBuffer;
 use rayon::prelude::*;
 
@@ -193,23 +195,19 @@ impl<T: Channel> FilteredMaps<T> {
         self.chains.first().map_or(0, |c| c.levels.len())
     }
 
-    /// Writes level 0 of each view's map as the picture `file(i)` for view `i`, each texel
-    /// coloured `colour(texel)`; does nothing unless the frame is dumping.
+    /// Hands level 0 of each view's map to the frame's dump as the picture `file(i)` for
+    /// view `i`, each texel coloured `colour(texel)` (made only when the frame is dumping).
     pub fn dump_level0(
         &self,
         frame: &Frame,
         file: impl Fn(usize) -> String,
         colour: impl Fn(&[T]) -> [u8; 3],
     ) -> Result<()> {
-        let Some(dir) = frame.dump_dir else {
-            return Ok(());
-        };
         for (i, c) in self.chains.iter().enumerate() {
             let t = &c.levels[0];
-            let img = image::RgbImage::from_fn(t.width, t.height, |x, y| {
-                image::Rgb(colour(t.texel(x, y)))
-            });
-            crate::shade::save_png(&img, &dir.join(file(i)))?;
+            frame.dump_image(&file(i), || {
+                RgbImage::from_fn(t.width, t.height, |x, y| image::Rgb(colour(t.texel(x, y))))
+            })?;
         }
         Ok(())
     }
