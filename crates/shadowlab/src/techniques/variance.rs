@@ -24,11 +24,9 @@
 //! the shadow lightens. Reduction darkens penumbrae. Point-light cube faces filter up to
 //! their own edges only.
 
-use super::filtering::{check_map_size, DepthRange, FilterSettings, FilteredMaps};
+use super::filtering::{frame_shadows, DepthRange, FilterSettings, FilteredMaps, MapLayout};
 use super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
-use super::{
-    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
-};
+use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
 use crate::error::Result;
 use crate::raster::{DepthBuffer, NO_TRIANGLE};
 use std::collections::BTreeMap;
@@ -158,19 +156,17 @@ impl ShadowTechnique for Variance {
     }
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
-        let res = check_resolution("vsm", self.resolution)?;
-        let views = if matches!(frame.light, crate::light::Light::Point { .. }) {
-            6
-        } else {
-            1
+        let layout = MapLayout {
+            technique: "vsm",
+            resolution: check_resolution("vsm", self.resolution)?,
+            channels: 2,
+            span: 1.0,
         };
-        check_map_size("vsm", views, res, 2, 4)?;
         let mut stats = Stats::default();
-        let maps = FilteredMaps::<f32>::build(
+        let (min_var, reduction) = (self.min_variance, self.bleed_reduction);
+        let (maps, value) = FilteredMaps::<f32>::shade_texels(
             frame,
-            res,
-            2,
-            1.0,
+            &layout,
             &self.filtering,
             &mut stats,
             |m, r, x, y, out| {
@@ -178,26 +174,10 @@ impl ShadowTechnique for Variance {
                 out[0] = z;
                 out[1] = z * z + var;
             },
-        );
-        let (min_var, reduction) = (self.min_variance, self.bleed_reduction);
-        let value = maps.lookup(frame, &self.filtering, &mut stats, |d, mo| {
-            chebyshev(d, mo[0], mo[1], min_var, reduction)
-        });
-        stats.memory_bytes = maps.memory_bytes();
-        stats.count("depth_map_bytes", maps.depth_bytes as f64);
-        stats.count(
-            "mip_levels",
-            maps.chains.first().map_or(0, |c| c.levels.len()) as f64,
-        );
-        Ok(Shadows {
-            visibility: Visibility {
-                width: frame.view.width,
-                height: frame.view.height,
-                value,
-            },
-            stats,
-            layers: None,
-        })
+            |d, mo| chebyshev(d, mo[0], mo[1], min_var, reduction),
+        )?;
+        stats.count("mip_levels", maps.mip_levels() as f64);
+        Ok(frame_shadows(frame, value, stats))
     }
 }
 

@@ -24,15 +24,15 @@
 //! almost as VSM does; very large exponents lose precision for receivers near the far
 //! end of the range.
 
-use super::super::filtering::{check_map_size, Channel, FilterSettings, FilteredMaps};
+use super::super::filtering::{frame_shadows, Channel, FilterSettings, FilteredMaps, MapLayout};
 use super::super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
 use super::super::variance::{chebyshev, texel_depth_and_variance, DEFAULT_MIN_VARIANCE};
 use super::super::{
-    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
+    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats,
 };
-use super::{Bits, F16};
+use super::{grey, Bits, F16};
 use crate::error::{Error, Result};
-use crate::light::Light;
+use crate::math::Vec3;
 use std::collections::BTreeMap;
 
 /// Largest exponent for f32 storage: `exp(2·42) ≈ 3·10³⁶`, below f32's 3.4·10³⁸ with room
@@ -139,18 +139,19 @@ impl ExponentialVariance {
         (self.exponent_pos.min(max), self.exponent_neg.min(max))
     }
 
-    fn render_with<T: Channel>(
-        &self,
-        frame: &Frame,
-        stats: &mut Stats,
-    ) -> Result<Vec<crate::math::Vec3>> {
+    fn render_with<T: Channel>(&self, frame: &Frame, stats: &mut Stats) -> Result<Vec<Vec3>> {
         let c = self.exponents();
         let n = self.moments;
-        let maps = FilteredMaps::<T>::build(
+        let layout = MapLayout {
+            technique: "evsm",
+            resolution: self.resolution,
+            channels: n,
+            span: 1.0,
+        };
+        let (min_var, reduction) = (self.min_variance, self.bleed_reduction);
+        let (maps, value) = FilteredMaps::<T>::shade_texels(
             frame,
-            self.resolution,
-            n,
-            1.0,
+            &layout,
             &self.filtering,
             stats,
             |m, r, x, y, out| {
@@ -166,21 +167,16 @@ impl ExponentialVariance {
                     out[3] = wn * wn + sn * sn * var;
                 }
             },
-        );
-        let (min_var, reduction) = (self.min_variance, self.bleed_reduction);
-        let value = maps.lookup(frame, &self.filtering, stats, |d, mo| {
-            lit(d, mo, c, min_var, reduction)
-        });
-        stats.memory_bytes = maps.memory_bytes();
-        stats.count("depth_map_bytes", maps.depth_bytes as f64);
+            |d, mo| lit(d, mo, c, min_var, reduction),
+        )?;
         stats.count("exponent_pos", c.0 as f64);
         stats.count("exponent_neg", c.1 as f64);
-        if frame.dumping() {
-            // The positive warp's mean, mapped back to normalized depth.
-            super::dump_level0(frame, "evsm", "mean-depth", &maps.chains, |t| {
-                (t[0].to_f32().max(1e-30).ln() / c.0.max(1e-6) + 1.0) * 0.5
-            })?;
-        }
+        // The positive warp's mean, mapped back to normalized depth.
+        maps.dump_level0(
+            frame,
+            |i| format!("evsm-mean-depth{i}.png"),
+            |t| grey((t[0].to_f32().max(1e-30).ln() / c.0.max(1e-6) + 1.0) * 0.5),
+        )?;
         Ok(value)
     }
 }
@@ -241,26 +237,13 @@ impl ShadowTechnique for ExponentialVariance {
     }
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
-        let res = check_resolution("evsm", self.resolution)?;
-        let views = if matches!(frame.light, Light::Point { .. }) {
-            6
-        } else {
-            1
-        };
-        check_map_size("evsm", views, res, self.moments, self.bits.bytes())?;
+        check_resolution("evsm", self.resolution)?;
         let mut stats = Stats::default();
         let value = match self.bits {
             Bits::B16 => self.render_with::<F16>(frame, &mut stats)?,
             Bits::B32 => self.render_with::<f32>(frame, &mut stats)?,
         };
-        Ok(Shadows::new(
-            Visibility {
-                width: frame.view.width,
-                height: frame.view.height,
-                value,
-            },
-            stats,
-        ))
+        Ok(frame_shadows(frame, value, stats))
     }
 }
 

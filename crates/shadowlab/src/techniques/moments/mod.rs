@@ -114,25 +114,10 @@ impl Channel for Unorm16 {
     }
 }
 
-/// Writes level 0 of each view's filtered map as a grey PNG `{name}-{label}{i}.png`, each
-/// texel's grey level `value(texel)` (clamped to `[0, 1]`, white = 1).
-pub(crate) fn dump_level0<T: Channel>(
-    frame: &super::Frame,
-    name: &str,
-    label: &str,
-    chains: &[super::filtering::MipChain<T>],
-    value: impl Fn(&[T]) -> f32,
-) -> Result<()> {
-    for (i, c) in chains.iter().enumerate() {
-        let t = &c.levels[0];
-        frame.dump_image(&format!("{name}-{label}{i}.png"), || {
-            crate::picture::RgbImage::from_fn(t.width, t.height, |x, y| {
-                let g = (value(t.texel(x, y)).clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
-                image::Rgb([g, g, g])
-            })
-        })?;
-    }
-    Ok(())
+/// The grey of a dumped map texel whose value is `v` (clamped to `[0, 1]`, white = 1).
+pub(crate) fn grey(v: f32) -> [u8; 3] {
+    let g = (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+    [g, g, g]
 }
 
 #[cfg(test)]

@@ -26,15 +26,15 @@
 //! more than three distinct depths); the bias slightly lightens contact shadows; 16-bit
 //! storage rounds the moments, which the bias hides at the cost of a little leaking.
 
-use super::super::filtering::{check_map_size, Channel, FilterSettings, FilteredMaps};
+use super::super::filtering::{frame_shadows, Channel, FilterSettings, FilteredMaps, MapLayout};
 use super::super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
 use super::super::{
-    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
+    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats,
 };
 use super::hamburger;
-use super::{Bits, Unorm16, UNORM16_MAX};
+use super::{grey, Bits, Unorm16, UNORM16_MAX};
 use crate::error::Result;
-use crate::light::Light;
+use crate::math::Vec3;
 use glam::{DMat4, DVec4};
 use std::collections::BTreeMap;
 
@@ -164,13 +164,26 @@ impl MomentShadowMap {
         frame: &Frame,
         stats: &mut Stats,
         quantized: bool,
-    ) -> Result<Vec<crate::math::Vec3>> {
-        let res = self.resolution;
-        let maps = FilteredMaps::<T>::build(
+    ) -> Result<Vec<Vec3>> {
+        let layout = MapLayout {
+            technique: "msm",
+            resolution: self.resolution,
+            channels: 4,
+            span: 1.0,
+        };
+        let inverse = theta().inverse();
+        // The moments that filtered stored values stand for.
+        let moments = |raw: [f64; 4]| {
+            if quantized {
+                dequantize(&inverse, raw.map(|v| v / UNORM16_MAX as f64))
+            } else {
+                raw
+            }
+        };
+        let (alpha, depth_bias) = (self.resolved_moment_bias(), self.depth_bias);
+        let (maps, value) = FilteredMaps::<T>::shade_texels(
             frame,
-            res,
-            4,
-            1.0,
+            &layout,
             &self.filtering,
             stats,
             |m, r, x, y, out| {
@@ -185,31 +198,17 @@ impl MomentShadowMap {
                     out.copy_from_slice(&[z, z2, z2 * z, z2 * z2]);
                 }
             },
-        );
-        let inverse = theta().inverse();
-        let (alpha, depth_bias) = (self.resolved_moment_bias(), self.depth_bias);
-        let value = maps.lookup(frame, &self.filtering, stats, |d, mo| {
-            let raw = [mo[0], mo[1], mo[2], mo[3]].map(|v| v as f64);
-            let b = if quantized {
-                dequantize(&inverse, raw.map(|v| v / UNORM16_MAX as f64))
-            } else {
-                raw
-            };
-            lit(b, d, alpha, depth_bias)
-        });
-        stats.memory_bytes = maps.memory_bytes();
-        stats.count("depth_map_bytes", maps.depth_bytes as f64);
-        if frame.dumping() {
-            // The first moment (the mean depth), recovered from what was stored.
-            super::dump_level0(frame, "msm", "mean-depth", &maps.chains, |t| {
-                let raw = [0, 1, 2, 3].map(|c| t[c].to_f32() as f64);
-                if quantized {
-                    dequantize(&inverse, raw.map(|v| v / UNORM16_MAX as f64))[0] as f32
-                } else {
-                    raw[0] as f32
-                }
-            })?;
-        }
+            |d, mo| {
+                let raw = [mo[0], mo[1], mo[2], mo[3]].map(|v| v as f64);
+                lit(moments(raw), d, alpha, depth_bias)
+            },
+        )?;
+        // The first moment (the mean depth), recovered from what was stored.
+        maps.dump_level0(
+            frame,
+            |i| format!("msm-mean-depth{i}.png"),
+            |t| grey(moments([0, 1, 2, 3].map(|c| t[c].to_f32() as f64))[0] as f32),
+        )?;
         Ok(value)
     }
 }
@@ -253,26 +252,13 @@ impl ShadowTechnique for MomentShadowMap {
     }
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
-        let res = check_resolution("msm", self.resolution)?;
-        let views = if matches!(frame.light, Light::Point { .. }) {
-            6
-        } else {
-            1
-        };
-        check_map_size("msm", views, res, 4, self.bits.bytes())?;
+        check_resolution("msm", self.resolution)?;
         let mut stats = Stats::default();
         let value = match self.bits {
             Bits::B16 => self.render_with::<Unorm16>(frame, &mut stats, true)?,
             Bits::B32 => self.render_with::<f32>(frame, &mut stats, false)?,
         };
-        Ok(Shadows::new(
-            Visibility {
-                width: frame.view.width,
-                height: frame.view.height,
-                value,
-            },
-            stats,
-        ))
+        Ok(frame_shadows(frame, value, stats))
     }
 }
 
