@@ -114,16 +114,54 @@ pub fn intersect_triangle(
     t_max: f32,
     v: [Vec3; 3],
 ) -> Option<TriangleHit> {
-    // Permute axes so that the ray's largest direction component is z.
-    let kz = dir.abs().max_position();
-    let mut kx = (kz + 1) % 3;
-    let mut ky = (kx + 1) % 3;
-    if dir[kz] < 0.0 {
-        std::mem::swap(&mut kx, &mut ky);
+    intersect_sheared(origin, RayShear::new(dir), t_min, t_max, v)
+}
+
+/// The per-ray half of the watertight test: the axis permutation and the shear that map a
+/// ray direction to +z. A caller testing one ray against many triangles may form it once
+/// (and store it compactly) and call [`intersect_sheared`] per triangle.
+#[derive(Clone, Copy, Debug)]
+pub struct RayShear {
+    /// Axis permutation `kx, ky, kz`: `kz` is the direction's largest component.
+    pub k: [usize; 3],
+    /// Shear constants `sx, sy, sz`.
+    pub s: [f32; 3],
+}
+
+impl RayShear {
+    /// The permutation and shear of direction `dir`.
+    #[inline]
+    pub fn new(dir: Vec3) -> Self {
+        // Permute axes so that the ray's largest direction component is z.
+        let kz = dir.abs().max_position();
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if dir[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let sz = 1.0 / dir[kz];
+        let sx = dir[kx] * sz;
+        let sy = dir[ky] * sz;
+        RayShear {
+            k: [kx, ky, kz],
+            s: [sx, sy, sz],
+        }
     }
-    let sz = 1.0 / dir[kz];
-    let sx = dir[kx] * sz;
-    let sy = dir[ky] * sz;
+}
+
+/// The per-triangle half of [`intersect_triangle`], for the ray from `origin` whose
+/// direction `shear` was formed from: the same floating-point operations, so the same
+/// answer bit for bit.
+#[inline]
+pub fn intersect_sheared(
+    origin: Vec3,
+    shear: RayShear,
+    t_min: f32,
+    t_max: f32,
+    v: [Vec3; 3],
+) -> Option<TriangleHit> {
+    let [kx, ky, kz] = shear.k;
+    let [sx, sy, sz] = shear.s;
     let a = v[0] - origin;
     let b = v[1] - origin;
     let c = v[2] - origin;
