@@ -279,13 +279,6 @@ pub fn orient2d_i64(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> i64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
-/// Texture coordinates `(u, v)` of a clip-space point: the divide by `w`, then NDC `[−1, 1]`
-/// to `[0, 1]` with `v` growing downwards (image rows).
-#[inline]
-pub fn ndc_to_uv(c: Vec4) -> (f32, f32) {
-    (c.x / c.w * 0.5 + 0.5, 0.5 - c.y / c.w * 0.5)
-}
-
 /// World-to-view matrix of an eye at `eye` looking at `target`: right-handed view space,
 /// looking down −Z with +Y up.
 pub fn look_at_rh(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
