@@ -1,10 +1,11 @@
 //! `shadowlab`: render, compare and benchmark shadow techniques from the command line.
 //!
-//! The flow, as each module's place in it: the arguments are parsed (`args`), turned into
-//! a validated configuration before any work (`config`), and the command runs on it
-//! (`commands`, one module per command) over the stages it shares — running techniques
-//! over frames (`frames`), the report (`report`), the bench suites (`bench`) — and what
-//! they all write with (`metrics`, `charts`, `output`, `progress`, `failure`).
+//! A run flows from the flags as clap parses them (`args`) to a configuration validated
+//! before any work (`config`) to the command (`commands`, one module per command). Each
+//! module uses only those after it in this list: `commands`, `bench` (the suites),
+//! `report`, `frames` (techniques over the frames of a view), `metrics` (the records
+//! written), `config`, `args`, `output` (every file written), `charts`, `progress`,
+//! `failure` (exit codes).
 //!
 //! Exit codes: 0 on success, 2 for bad input (a file, a flag, a parameter, a scene), 1 for
 //! other failures (see `failure`). Errors are one sentence on stderr naming the culprit.
