@@ -1,66 +1,29 @@
 //! The command line as scripts use it: exit codes, one-sentence errors, outputs.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod support;
 
-fn bin() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_shadowlab"));
-    c.arg("--quiet");
-    c
-}
-
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shadowlab/assets")).join(name)
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("shadowlab-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// Bad input: exit code 2, one line on stderr that starts with `error:` and mentions
-/// `needle`, and no panic.
-fn assert_bad_input(out: &Output, needle: &str) {
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(
-        out.status.code(),
-        Some(2),
-        "expected exit 2, got {:?}; stderr: {err}",
-        out.status.code()
-    );
-    assert!(!err.contains("panicked"), "panic: {err}");
-    assert_eq!(
-        err.trim().lines().count(),
-        1,
-        "expected one sentence, got: {err}"
-    );
-    assert!(err.starts_with("error:"), "{err}");
-    assert!(
-        err.to_lowercase().contains(&needle.to_lowercase()),
-        "{err:?} does not mention {needle:?}"
-    );
-}
+use std::path::Path;
+use support::{data, quiet as bin, refused, tmp, Capture, Ran};
 
 /// The `metrics.json` of the report `compare` wrote into `dir`, after checking it succeeded.
-fn report_metrics(out: &Output, dir: &Path) -> serde_json::Value {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_str(&std::fs::read_to_string(dir.join("metrics.json")).unwrap()).unwrap()
+fn report_metrics(out: &Ran, dir: &Path) -> serde_json::Value {
+    support::ok(out);
+    support::metrics(dir)
 }
 
-fn render(dir: &Path, args: &[&str]) -> Output {
+fn render(dir: &Path, args: &[&str]) -> Ran {
     bin()
         .arg("render")
         .args(args)
         .arg("--output")
         .arg(dir.join("out.png"))
-        .output()
-        .unwrap()
+        .ran()
+}
+
+/// Bad input: exit code 2, one line on stderr that starts with `error:` and mentions
+/// `needle`, and no panic.
+fn assert_bad_input(out: &Ran, needle: &str) {
+    refused(out, &[needle]);
 }
 
 #[test]
@@ -212,9 +175,9 @@ fn files_in_the_bad_folder_never_panic() {
                 "--force",
             ],
         );
-        let err = String::from_utf8_lossy(&out.stderr);
+        let err = &out.stderr;
         assert!(!err.contains("panicked"), "{}: {err}", f.display());
-        match out.status.code() {
+        match out.code {
             Some(0) => {}
             Some(2) => assert_bad_input(&out, f.file_name().unwrap().to_str().unwrap()),
             c => panic!("{}: exit {c:?}: {err}", f.display()),
@@ -241,16 +204,10 @@ fn render_writes_image_visibility_and_stats_and_refuses_to_overwrite() {
         "--stats",
         stats.to_str().unwrap(),
     ];
-    let out = render(&d, &args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    support::ok(&render(&d, &args));
     let png = image::open(d.join("out.png")).unwrap();
     assert_eq!((png.width(), png.height()), (96, 72));
-    let stats: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(d.join("stats.json")).unwrap()).unwrap();
+    let stats = support::read_json(&d.join("stats.json"));
     assert_eq!(stats["technique"], "pcf");
     assert_eq!(stats["params"]["kernel"], 3);
     assert_eq!(stats["camera"]["width"], 96);
@@ -282,8 +239,7 @@ fn compare_writes_metrics_and_refuses_foreign_folders() {
             .arg("--out")
             .arg(&out_dir)
             .args(extra)
-            .output()
-            .unwrap()
+            .ran()
     };
     let out = run(&[]);
     let m = report_metrics(&out, &out_dir);
@@ -307,7 +263,7 @@ fn compare_writes_metrics_and_refuses_foreign_folders() {
     }
     assert!(m["reference"]["time_ms"].as_f64().unwrap() > 0.0);
     // Writing again into an earlier report is fine.
-    assert!(run(&[]).status.success());
+    support::ok(&run(&[]));
     // A folder that holds something else is refused unless --force.
     let foreign = d.join("foreign");
     std::fs::create_dir_all(&foreign).unwrap();
@@ -326,8 +282,7 @@ fn compare_writes_metrics_and_refuses_foreign_folders() {
             "--out",
         ])
         .arg(&foreign)
-        .output()
-        .unwrap();
+        .ran();
     assert_bad_input(&out, "--force");
     assert_eq!(
         std::fs::read_to_string(foreign.join("thesis.tex")).unwrap(),
@@ -356,8 +311,7 @@ fn layers_behind_semi_transparent_surfaces_are_shaded_and_measured() {
         ])
         .arg("--out")
         .arg(&out_dir)
-        .output()
-        .unwrap();
+        .ran();
     let m = report_metrics(&out, &out_dir);
     assert!(m["layer_samples"].as_u64().unwrap() > 1000);
     let results = m["results"].as_array().unwrap();
@@ -384,9 +338,8 @@ fn layers_behind_semi_transparent_surfaces_are_shaded_and_measured() {
             .arg("--output")
             .arg(p)
             .args(extra)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            .ran();
+        support::ok(&o);
     }
     assert_ne!(
         std::fs::read(&layered).unwrap(),
@@ -414,8 +367,8 @@ fn loader_warnings_reach_stderr_stats_and_metrics() {
             stats.to_str().unwrap(),
         ],
     );
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
+    let err = &out.stderr;
+    support::ok(&out);
     // One line per kind: short faces, `l`, `p`, statements not read.
     let lines: Vec<&str> = err.lines().collect();
     assert_eq!(lines.len(), 4, "{err}");
@@ -425,8 +378,7 @@ fn loader_warnings_reach_stderr_stats_and_metrics() {
             .all(|l| l.starts_with("warning: edges.obj: skipped ")),
         "{err}"
     );
-    let stats: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let stats = support::read_json(&stats);
     let said: Vec<String> = lines
         .iter()
         .map(|l| l.trim_start_matches("warning: ").to_string())
@@ -449,8 +401,7 @@ fn loader_warnings_reach_stderr_stats_and_metrics() {
             "--out",
         ])
         .arg(&rep)
-        .output()
-        .unwrap();
+        .ran();
     let m = report_metrics(&out, &rep);
     let w: Vec<&str> = m["warnings"]
         .as_array()
@@ -474,8 +425,7 @@ fn loader_warnings_reach_stderr_stats_and_metrics() {
             "--out",
         ])
         .arg(&rep)
-        .output()
-        .unwrap();
+        .ran();
     assert_eq!(
         report_metrics(&out, &rep)["warnings"],
         serde_json::json!([])
@@ -506,25 +456,97 @@ fn camera_index_picks_a_gltf_camera_and_is_checked() {
             ],
         )
     };
-    let read = |p: &Path| -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
-    };
     let (s0, s1) = (d.join("s0.json"), d.join("s1.json"));
-    let out = run("0", &s0);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    support::ok(&run("0", &s0));
+    support::ok(&run("1", &s1));
+    let (c0, c1) = (
+        support::read_json(&s0)["camera"].clone(),
+        support::read_json(&s1)["camera"].clone(),
     );
-    let out = run("1", &s1);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let (c0, c1) = (read(&s0)["camera"].clone(), read(&s1)["camera"].clone());
     assert_ne!(c0, c1);
     assert!((c0["fov_y_deg"].as_f64().unwrap() - 0.7f64.to_degrees()).abs() < 1e-3);
     assert_bad_input(&run("2", &d.join("s2.json")), "has 2 cameras");
     assert_bad_input(&run("x", &d.join("s3.json")), "--camera-index");
+}
+
+#[test]
+fn an_output_that_cannot_be_written_is_an_internal_failure_not_bad_input() {
+    // The checks before any work pass (the folder exists, the file is new); then the
+    // write fails: here because the file size limit is one 512-byte block, as a full
+    // disk would. That is no fault of the input: exit 1, one sentence naming the file.
+    let d = tmp("unwritable");
+    let args = |output: &'static str| {
+        [
+            "render",
+            "--scene",
+            "bunny",
+            "--technique",
+            "sm",
+            "--width",
+            "256",
+            "--height",
+            "192",
+            "--output",
+            output,
+        ]
+    };
+    let limit = std::time::Duration::from_secs(60);
+    let r = support::run_limited(&d, "trap '' XFSZ; ulimit -f 1", limit, &args("out.png"));
+    support::failed_with(&r, 1, &["cannot write", "out.png"]);
+    // The same run without the limit succeeds.
+    let r = support::run_limited(&d, "true", limit, &args("ok.png"));
+    support::ok(&r);
+}
+
+#[test]
+fn techniques_lists_every_technique_with_its_parameters() {
+    let all = bin().arg("techniques").ran();
+    support::ok(&all);
+    for t in shadowlab::techniques::ALL {
+        assert!(
+            all.stdout
+                .lines()
+                .any(|l| l.split_whitespace().next() == Some(t)),
+            "{t} is not listed: {}",
+            all.stdout
+        );
+    }
+    let sm = bin().args(["techniques", "sm"]).ran();
+    support::ok(&sm);
+    let keys: Vec<&str> = sm
+        .stdout
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
+    for key in ["resolution", "bias"] {
+        assert!(keys.contains(&key), "sm lacks {key}: {}", sm.stdout);
+    }
+    // Every listed key is one `render --param` accepts, at its listed default.
+    for line in sm.stdout.lines().skip(1) {
+        let mut cells = line.split_whitespace();
+        let (Some(key), Some(default)) = (cells.next(), cells.next()) else {
+            continue;
+        };
+        if key == "key" {
+            continue;
+        }
+        let d = tmp(&format!("techniques-{key}"));
+        let r = render(
+            &d,
+            &[
+                "--technique",
+                "sm",
+                "--param",
+                &format!("{key}={default}"),
+                "--width",
+                "32",
+                "--height",
+                "24",
+            ],
+        );
+        support::ok(&r);
+    }
+    let unknown = bin().args(["techniques", "no-such-technique"]).ran();
+    refused(&unknown, &["no-such-technique", "known techniques are"]);
 }

@@ -1,25 +1,16 @@
 //! `docs/CLI.md` is the command-line contract: every command, flag, bench suite and JSON
 //! field the program has is documented there, and everything documented there exists.
 
+mod support;
+
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::PathBuf;
-use std::process::Command;
+use support::{read_json, shadowlab, tmp, Capture, Ran};
 
 const CLI_MD: &str = include_str!("../../../docs/CLI.md");
 
-fn run(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_shadowlab"))
-        .args(args)
-        .output()
-        .expect("the shadowlab binary runs")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("shadowlab-contract-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn run(args: &[&str]) -> Ran {
+    shadowlab().args(args).ran()
 }
 
 /// The lines of the section that starts with the heading `heading`, up to the next heading
@@ -93,8 +84,8 @@ fn flags_in(text: &str) -> BTreeSet<String> {
 /// The long flags `shadowlab <cmd> --help` lists, without clap's own `--help`/`--version`.
 fn parser_flags(cmd: &str) -> BTreeSet<String> {
     let out = run(&[cmd, "--help"]);
-    assert!(out.status.success(), "{cmd} --help failed");
-    let help = String::from_utf8_lossy(&out.stdout);
+    assert!(out.success(), "{cmd} --help failed");
+    let help = &out.stdout;
     let mut flags = BTreeSet::new();
     for line in help.lines() {
         let t = line.trim_start();
@@ -156,7 +147,7 @@ fn every_flag_is_documented_and_every_documented_flag_exists() {
 #[test]
 fn every_command_is_documented() {
     let out = run(&["--help"]);
-    let help = String::from_utf8_lossy(&out.stdout);
+    let help = &out.stdout;
     let commands: BTreeSet<String> = help
         .lines()
         .skip_while(|l| !l.starts_with("Commands:"))
@@ -180,8 +171,8 @@ fn every_command_is_documented() {
 #[test]
 fn every_bench_suite_is_documented() {
     let out = run(&["--quiet", "bench", "no-such-suite"]);
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.code, Some(2));
+    let err = &out.stderr;
     let list = err
         .split("known suites are ")
         .nth(1)
@@ -255,10 +246,6 @@ fn paths(v: &Value, prefix: &str, doc: &BTreeMap<String, Field>, out: &mut BTree
     }
 }
 
-fn read_json(p: &std::path::Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
-}
-
 /// Every field of `outputs` documented in `heading`; every field documented as always
 /// present there in `plain`.
 fn check_fields(heading: &str, plain: &Value, outputs: &[Value]) {
@@ -319,11 +306,7 @@ fn every_metrics_field_is_documented_and_every_always_field_is_written() {
         args.extend_from_slice(&size);
         args.extend_from_slice(extra);
         let out = run(&args);
-        assert!(
-            out.status.success(),
-            "compare {extra:?}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert!(out.success(), "compare {extra:?}: {}", out.stderr);
         outputs.push(read_json(&out_dir.join("metrics.json")));
     }
     check_fields("## metrics.json (compare)", &outputs[0], &outputs);
@@ -363,11 +346,7 @@ fn every_stats_field_is_documented_and_every_always_field_is_written() {
         ];
         args.extend_from_slice(extra);
         let out = run(&args);
-        assert!(
-            out.status.success(),
-            "render {extra:?}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert!(out.success(), "render {extra:?}: {}", out.stderr);
         outputs.push(read_json(&stats));
     }
     check_fields("## render --stats", &outputs[0], &outputs);

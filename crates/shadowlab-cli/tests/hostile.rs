@@ -5,9 +5,12 @@
 //! (`ulimit -v 4000000`) and killed after 20 s: it must exit 2 with one sentence, or 0
 //! where the input is fine, and never abort, panic or hang.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+mod support;
+
+use std::path::Path;
+use std::process::Command;
+use std::time::Duration;
+use support::{ok, refused, tmp, Ran};
 
 /// The address-space limit of every run, in KiB.
 const ULIMIT_V_KIB: &str = "4000000";
@@ -15,74 +18,10 @@ const ULIMIT_V_KIB: &str = "4000000";
 /// A run taking longer than this has hung.
 const TIMEOUT: Duration = Duration::from_secs(20);
 
-struct Run {
-    code: Option<i32>,
-    stderr: String,
-    secs: f64,
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("shadowlab-hostile-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
 /// Runs `shadowlab --quiet ARGS` in `dir` under the address-space limit, killing it after
 /// [`TIMEOUT`] (which fails the test).
-fn run(dir: &Path, args: &[&str]) -> Run {
-    let err_path = dir.join(".stderr");
-    let err = std::fs::File::create(&err_path).unwrap();
-    let t0 = Instant::now();
-    let mut child = Command::new("sh")
-        .arg("-c")
-        .arg(format!("ulimit -v {ULIMIT_V_KIB}; exec \"$0\" \"$@\""))
-        .arg(env!("CARGO_BIN_EXE_shadowlab"))
-        .arg("--quiet")
-        .args(args)
-        .current_dir(dir)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(err)
-        .spawn()
-        .unwrap();
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if t0.elapsed() > TIMEOUT {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("shadowlab {args:?} ran past {TIMEOUT:?} (killed)");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    let stderr = std::fs::read_to_string(&err_path).unwrap_or_default();
-    let _ = std::fs::remove_file(&err_path);
-    Run {
-        code: status.code(),
-        stderr,
-        secs: t0.elapsed().as_secs_f64(),
-    }
-}
-
-/// Exit 2 and one sentence on stderr mentioning every one of `needles`.
-fn refused(r: &Run, needles: &[&str]) {
-    let e = &r.stderr;
-    assert_eq!(r.code, Some(2), "expected exit 2, got {:?}: {e}", r.code);
-    assert!(!e.contains("panicked"), "panic: {e}");
-    assert_eq!(e.trim().lines().count(), 1, "expected one sentence: {e}");
-    assert!(e.starts_with("error: "), "{e}");
-    for n in needles {
-        assert!(
-            e.to_lowercase().contains(&n.to_lowercase()),
-            "{e:?} does not mention {n:?}"
-        );
-    }
-}
-
-fn ok(r: &Run) {
-    assert_eq!(r.code, Some(0), "expected success: {}", r.stderr);
+fn run(dir: &Path, args: &[&str]) -> Ran {
+    support::run_limited(dir, &format!("ulimit -v {ULIMIT_V_KIB}"), TIMEOUT, args)
 }
 
 /// Small, fast render flags: the output goes to `out.png` in the run's folder.
@@ -98,7 +37,7 @@ const FAST: &[&str] = &[
     "--force",
 ];
 
-fn render(dir: &Path, scene: &str, extra: &[&str]) -> Run {
+fn render(dir: &Path, scene: &str, extra: &[&str]) -> Ran {
     let mut args = vec!["render", "--scene", scene, "--output", "out.png"];
     args.extend_from_slice(FAST);
     args.extend_from_slice(extra);

@@ -5,13 +5,13 @@
 //! Needs Debian's `chromium` on PATH. Without it the test says so and passes, unless the
 //! `CI` environment variable is set: then a missing browser is a failure.
 
+mod support;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
-
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shadowlab/assets");
-const SHADOWLAB: &str = env!("CARGO_BIN_EXE_shadowlab");
+use std::time::Duration;
+use support::{data, shadowlab, tmp, Capture};
 /// Chromium gets this long to load the page and run the self-test before the test gives up.
 const BROWSER_TIMEOUT: Duration = Duration::from_secs(120);
 /// Virtual time the page may use: images decode and `load` fires well within it.
@@ -30,34 +30,12 @@ fn chromium() -> Option<PathBuf> {
     None
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("shadowlab-e2e-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
 /// Runs `cmd` with stdout into a file, killing it after `limit`; returns stdout.
 fn run_with_timeout(mut cmd: Command, limit: Duration, out_file: &Path) -> String {
     let f = std::fs::File::create(out_file).unwrap();
-    let mut child = cmd
-        .stdout(f)
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("browser starts");
-    let t0 = Instant::now();
-    loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            assert!(status.success(), "browser exited with {status}");
-            break;
-        }
-        if t0.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("browser did not finish within {limit:?}");
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    }
+    cmd.stdout(f).stderr(Stdio::null());
+    let (status, _) = support::wait_at_most(&mut cmd, limit);
+    assert!(status.success(), "browser exited with {status}");
     std::fs::read_to_string(out_file).unwrap()
 }
 
@@ -110,16 +88,12 @@ fn report_opens_in_chromium_with_every_row_image_and_a_working_slider() {
         );
         return;
     };
-    let dir = scratch("report");
+    let dir = tmp("report");
     let out = dir.join("report");
-    let status = Command::new(SHADOWLAB)
-        .args([
-            "compare",
-            "--scene",
-            &format!("{DATA}/bunny.obj"),
-            "--techniques",
-            "all",
-        ])
+    let status = shadowlab()
+        .args(["compare", "--scene"])
+        .arg(data("bunny.obj"))
+        .args(["--techniques", "all"])
         .args([
             "--sweep",
             "sm.resolution=256,512,1024",
@@ -136,8 +110,7 @@ fn report_opens_in_chromium_with_every_row_image_and_a_working_slider() {
         .expect("shadowlab runs");
     assert!(status.success(), "compare failed: {status}");
 
-    let metrics: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
+    let metrics = support::metrics(&out);
     let labels: Vec<String> = metrics["results"]
         .as_array()
         .unwrap()
@@ -264,30 +237,18 @@ fn report_opens_in_chromium_with_every_row_image_and_a_working_slider() {
 
 #[test]
 fn progress_is_silent_when_stderr_is_not_a_terminal() {
-    let dir = scratch("quiet");
+    let dir = tmp("quiet");
     let run = |extra: &[&str]| {
-        let out = Command::new(SHADOWLAB)
-            .args([
-                "compare",
-                "--scene",
-                &format!("{DATA}/bunny.obj"),
-                "--techniques",
-                "sm,raytrace",
-            ])
+        let out = shadowlab()
+            .args(["compare", "--scene"])
+            .arg(data("bunny.obj"))
+            .args(["--techniques", "sm,raytrace"])
             .args(["--width", "96", "--height", "72", "--force", "--out"])
             .arg(dir.join("r"))
             .args(extra)
-            .output()
-            .expect("shadowlab runs");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        (
-            String::from_utf8(out.stdout).unwrap(),
-            String::from_utf8(out.stderr).unwrap(),
-        )
+            .ran();
+        support::ok(&out);
+        (out.stdout, out.stderr)
     };
     let (stdout, stderr) = run(&[]);
     assert_eq!(stderr, "", "progress drawn into a pipe");

@@ -2,35 +2,11 @@
 //! verdict names its reference, progressive techniques run to convergence on a still
 //! view, and the automatic light puts shadows where the camera sees them.
 
+mod support;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn bin() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_shadowlab"));
-    c.arg("--quiet");
-    c
-}
-
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shadowlab/assets")).join(name)
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("shadowlab-verdict-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run(cmd: &mut Command) {
-    let out = cmd.output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
+use support::{data, metrics, quiet as bin, run_ok as run, shadowlab, tmp};
 
 /// `metrics.json` without what measures the clock or the machine: times, and the thread
 /// count the run was given.
@@ -47,9 +23,9 @@ fn without_timings(v: &Value) -> Value {
     }
 }
 
-/// Every file of a report folder with its bytes, but those that show timings:
+/// Every file of a report folder, relative to it, but those that show timings:
 /// `metrics.json` (compared without them), the HTML and the plots (error against time).
-fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+fn files(dir: &Path) -> Vec<String> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
@@ -63,17 +39,12 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
                 p.file_name().and_then(|n| n.to_str()),
                 Some("metrics.json" | "index.html")
             ) {
-                let rel = p.strip_prefix(dir).unwrap().display().to_string();
-                out.push((rel, std::fs::read(&p).unwrap()));
+                out.push(p.strip_prefix(dir).unwrap().display().to_string());
             }
         }
     }
     out.sort();
     out
-}
-
-fn metrics(dir: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("metrics.json")).unwrap()).unwrap()
 }
 
 #[test]
@@ -92,16 +63,13 @@ fn identical_runs_give_identical_bytes_at_one_and_two_threads() {
         reports.push(out);
     }
     let first_files = files(&reports[0]);
-    assert!(first_files.iter().any(|(n, _)| n == "asm.png"));
+    assert!(first_files.iter().any(|n| n == "asm.png"));
     let first_metrics = without_timings(&metrics(&reports[0]));
-    for r in &reports[1..] {
-        let these = files(r);
-        assert_eq!(
-            first_files.iter().map(|f| &f.0).collect::<Vec<_>>(),
-            these.iter().map(|f| &f.0).collect::<Vec<_>>()
-        );
-        for (a, b) in first_files.iter().zip(&these) {
-            assert!(a.1 == b.1, "{} differs in {}", a.0, r.display());
+    for (i, r) in reports.iter().enumerate().skip(1) {
+        assert_eq!(first_files, files(r));
+        for f in &first_files {
+            let what = format!("verdict-report-{i}-{f}");
+            support::assert_same_files(&what, &reports[0].join(f), &r.join(f));
         }
         assert_eq!(
             first_metrics,
@@ -111,7 +79,7 @@ fn identical_runs_give_identical_bytes_at_one_and_two_threads() {
         );
     }
     for technique in ["asm", "csm", "afsm", "subpixel"] {
-        let mut exrs = Vec::new();
+        let mut exrs: Vec<PathBuf> = Vec::new();
         for (i, threads) in ["1", "1", "2", "2"].iter().enumerate() {
             let exr = d.join(format!("{technique}-{i}.exr"));
             run(bin()
@@ -129,10 +97,11 @@ fn identical_runs_give_identical_bytes_at_one_and_two_threads() {
                 .arg(d.join(format!("{technique}-{i}.png")))
                 .arg("--visibility")
                 .arg(&exr));
-            exrs.push(std::fs::read(&exr).unwrap());
+            exrs.push(exr);
         }
-        for e in &exrs[1..] {
-            assert!(*e == exrs[0], "{technique}: the EXRs differ");
+        for (i, e) in exrs.iter().enumerate().skip(1) {
+            let what = format!("verdict-{technique}-exr-{i}");
+            support::assert_same_files(&what, &exrs[0], e);
         }
     }
 }
@@ -198,16 +167,13 @@ fn the_automatic_light_shadows_what_the_camera_sees_and_is_printed() {
     let d = tmp("light");
     for mesh in ["fence/fence.obj", "bunny.obj", "bike/bike.obj"] {
         let out = d.join(mesh.replace('/', "-"));
-        let o = Command::new(env!("CARGO_BIN_EXE_shadowlab"))
+        let o = run(shadowlab()
             .arg("compare")
             .arg("--scene")
             .arg(data(mesh))
             .args(["--techniques", "sm", "--width", "160", "--height", "120"])
             .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            .arg(&out));
         let m = metrics(&out);
         let d = &m["light"]["to_light"];
         let printed = format!(
@@ -216,7 +182,7 @@ fn the_automatic_light_shadows_what_the_camera_sees_and_is_printed() {
             d[1].as_f64().unwrap(),
             d[2].as_f64().unwrap()
         );
-        let said = String::from_utf8_lossy(&o.stdout);
+        let said = &o.stdout;
         assert!(
             said.contains(&printed),
             "{mesh}: {said:?} lacks {printed:?}"

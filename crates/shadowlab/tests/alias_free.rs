@@ -4,6 +4,8 @@
 //! semi-transparent shadows, the shadow terms of the layers behind semi-transparent
 //! receivers, and independence of thread count and leaf size.
 
+mod support;
+
 use shadowlab::camera::Camera;
 use shadowlab::compare::{compare, Metrics};
 use shadowlab::light::Light;
@@ -13,7 +15,7 @@ use shadowlab::scene::{self, builtin, Material, Scene};
 use shadowlab::techniques::{self, Frame, Shadows};
 use shadowlab::view::{ViewLayers, ViewSamples};
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use support::{data, lights_for};
 
 /// The exactness target: share of covered pixels whose shadow term may differ from the
 /// reference (numerical ties only).
@@ -25,38 +27,12 @@ const WIDTH: u32 = 1024;
 /// See [`WIDTH`].
 const HEIGHT: u32 = 768;
 
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets")).join(name)
-}
-
 fn afsm(frame: &Frame, params: &[(&str, &str)]) -> Shadows {
     let mut t = techniques::create("afsm").unwrap();
     for (k, v) in params {
         t.set_param(k, v).unwrap();
     }
     t.render(frame).unwrap()
-}
-
-/// Directional, spot and point lights placed from the scene's bounds: the spot shines from
-/// above at an angle, the point light hangs low over the scene's centre so that its
-/// samples spread over several cube faces.
-fn lights_for(scene: &Scene) -> Vec<Light> {
-    let b = scene.bounds;
-    let c = b.center();
-    let size = (b.max - b.min).max_element();
-    vec![
-        Light::Directional {
-            to_light: vec3(-0.4, 1.0, 0.3).normalize(),
-        },
-        Light::Spot {
-            position: c + vec3(0.4, 1.2, 0.6) * size,
-            target: c,
-            fov_deg: 60.0,
-        },
-        Light::Point {
-            position: vec3(c.x + 0.05 * size, b.max.y + 0.02 * size, c.z + 0.1 * size),
-        },
-    ]
 }
 
 fn camera_for(scene: &Scene, w: u32, h: u32) -> Camera {

@@ -5,6 +5,8 @@
 //! Run with `cargo test --release -p shadowlab --features embree --test embree`.
 #![cfg(feature = "embree")]
 
+mod support;
+
 use shadowlab::compare::compare;
 use shadowlab::embree::EmbreeScene;
 use shadowlab::light::Light;
@@ -14,30 +16,12 @@ use shadowlab::scene::{self, Scene};
 use shadowlab::techniques::Frame;
 use shadowlab::view::ViewSamples;
 use std::collections::BTreeMap;
+use support::lights_for;
 
 /// Share of covered pixels allowed to differ: Embree's triangle test is not the watertight
 /// one and it does not skip the receiver's own triangle, so rays grazing an edge or leaving
 /// a surface at a grazing angle may differ.
 const MISMATCH_LIMIT: f64 = 1e-3;
-
-fn lights_for(scene: &Scene) -> Vec<Light> {
-    let b = scene.bounds;
-    let c = b.center();
-    let size = (b.max - b.min).max_element();
-    vec![
-        Light::Directional {
-            to_light: vec3(-0.4, 1.0, 0.3).normalize(),
-        },
-        Light::Spot {
-            position: c + vec3(0.4, 1.2, 0.6) * size,
-            target: c,
-            fov_deg: 60.0,
-        },
-        Light::Point {
-            position: vec3(c.x + 0.05 * size, b.max.y + 0.02 * size, c.z + 0.1 * size),
-        },
-    ]
-}
 
 #[test]
 fn embree_agrees_with_the_reference() {

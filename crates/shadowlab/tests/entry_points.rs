@@ -1,6 +1,8 @@
 //! The library's entry points for other renderers: a caller's G-buffer, point queries,
 //! indexed meshes, geometry that moves between frames, and several lights in one frame.
 
+mod support;
+
 use shadowlab::camera::Camera;
 use shadowlab::gbuffer::GBuffer;
 use shadowlab::light::Light;
@@ -65,13 +67,8 @@ fn gbuffer_of_the_camera_pass_gives_bit_identical_visibility_for_every_technique
         let b = deterministic(name)
             .render(&Frame::new(&scene, &camera, &light, &handed))
             .unwrap();
-        let differ = (0..a.visibility.value.len())
-            .filter(|&k| {
-                a.visibility.value[k].to_array().map(f32::to_bits)
-                    != b.visibility.value[k].to_array().map(f32::to_bits)
-            })
-            .count();
-        assert_eq!(differ, 0, "{name}: {differ} pixels differ");
+        let what = format!("entry-points-gbuffer-{name}");
+        support::assert_same_visibility(&what, &a.visibility, &b.visibility);
     }
 }
 

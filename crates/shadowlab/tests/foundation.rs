@@ -1,6 +1,8 @@
 //! The ground every technique is measured on: the camera pass against ray casts, the
 //! standard shadow map's convergence, and thread-count independence.
 
+mod support;
+
 use shadowlab::camera::Camera;
 use shadowlab::compare::compare;
 use shadowlab::light::Light;
@@ -9,11 +11,7 @@ use shadowlab::reference::Reference;
 use shadowlab::scene::{self, Material, Scene};
 use shadowlab::techniques::{self, Frame};
 use shadowlab::view::{ViewLayers, ViewSamples};
-use std::path::PathBuf;
-
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets")).join(name)
-}
+use support::{assert_same_visibility, data};
 
 fn bunny() -> (Scene, Camera, Light) {
     let s = scene::load(data("bunny.obj").to_str().unwrap(), &Default::default()).unwrap();
@@ -290,13 +288,13 @@ fn results_are_identical_for_one_two_and_four_threads() {
             for name in techniques::ALL {
                 let mut t = techniques::create(name).unwrap();
                 let r = t.render(&frame).unwrap_or_else(|e| panic!("{name}: {e}"));
-                per.push((name.to_string(), r.visibility.value));
+                per.push((name.to_string(), r.visibility));
             }
             (view.depth.clone(), view.triangle.clone(), per)
         });
         outputs.push(out);
     }
-    for o in &outputs[1..] {
+    for (i, o) in outputs.iter().enumerate().skip(1) {
         assert!(
             o.0.iter()
                 .zip(&outputs[0].0)
@@ -305,11 +303,8 @@ fn results_are_identical_for_one_two_and_four_threads() {
         );
         assert_eq!(o.1, outputs[0].1, "camera pass ids differ");
         for ((name, a), (_, b)) in o.2.iter().zip(&outputs[0].2) {
-            let same = a
-                .iter()
-                .zip(b)
-                .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits));
-            assert!(same, "{name} differs across thread counts");
+            let what = format!("foundation-{name}-threads-{}", [1, 2, 4][i]);
+            assert_same_visibility(&what, a, b);
         }
     }
 }

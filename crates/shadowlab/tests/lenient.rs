@@ -4,24 +4,11 @@
 //! file without those parts; what cannot be trusted (a required extension shadowlab
 //! lacks, a glTF 1.0 file, a file cut short) is still refused, naming the culprit.
 
+mod support;
+
 use shadowlab::scene::{self, gltf, obj, LoadOptions, Scene};
 use std::path::{Path, PathBuf};
-
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets")).join(name)
-}
-
-/// A fresh scratch folder for one test.
-fn scratch(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("shadowlab-lenient-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn load(path: &Path) -> shadowlab::Result<Scene> {
-    scene::load(path.to_str().unwrap(), &Default::default())
-}
+use support::{data, load, scratch};
 
 /// The triangles of a scene, in order.
 fn triangles(s: &Scene) -> Vec<[shadowlab::math::Vec3; 3]> {

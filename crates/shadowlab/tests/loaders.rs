@@ -4,6 +4,8 @@
 //! loads as documented; and every malformed input is an error naming the file and the
 //! problem — never a panic.
 
+mod support;
+
 use shadowlab::camera::Camera;
 use shadowlab::compare::compare;
 use shadowlab::light::Light;
@@ -12,7 +14,8 @@ use shadowlab::reference::Reference;
 use shadowlab::scene::{self, gltf, obj, ply, Scene};
 use shadowlab::techniques::{self, Frame};
 use shadowlab::view::ViewSamples;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use support::{data, load, scratch};
 
 /// Image size of the render checks: small, the loaders are under test, not the techniques.
 const TEST_WIDTH: u32 = 160;
@@ -25,22 +28,6 @@ const TEST_HEIGHT: u32 = 120;
 const SMOKE_MISMATCH_LIMIT: f64 = 0.2;
 /// Tolerance on positions that pass through f32 transforms.
 const POSITION_TOLERANCE: f32 = 1e-5;
-
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets")).join(name)
-}
-
-/// A fresh scratch folder for one test.
-fn scratch(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("shadowlab-loaders-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn load(path: &Path) -> shadowlab::Result<Scene> {
-    scene::load(path.to_str().unwrap(), &Default::default())
-}
 
 /// Renders `scene` with its own camera (shrunk) and light through `sm` and the reference.
 /// Returns (covered pixels, mismatch rate of `sm` against the reference).

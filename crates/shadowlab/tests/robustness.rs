@@ -5,6 +5,8 @@
 //! shape, NaN and range, for the shared illumination test (0 wherever the light cannot
 //! reach the viewed side) and for agreement with the ray-traced reference.
 
+mod support;
+
 use shadowlab::camera::{Camera, MAX_IMAGE_SIDE};
 use shadowlab::compare::compare;
 use shadowlab::light::Light;
@@ -16,7 +18,7 @@ use shadowlab::techniques::{self, Frame, Visibility};
 use shadowlab::view::ViewSamples;
 use shadowlab::Error;
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use support::{assert_same_visibility, data};
 
 /// Largest mismatch against the reference accepted from the map-based techniques on these
 /// small frames: a few pixels along shadow edges at 160×120 are about 1%; a technique that
@@ -38,10 +40,6 @@ const EXACT: &[&str] = &["raytrace", "afsm"];
 const W: u32 = 160;
 /// Image height of the frames tested here.
 const H: u32 = 120;
-
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets")).join(name)
-}
 
 /// A technique with the settings used here: `asm` without its wall-clock time budget, so
 /// its result depends on the frame alone.
@@ -986,9 +984,9 @@ fn technique_memory_is_limited_before_allocation() {
 // ---------------------------------------------------------------------------------------
 // Determinism
 
-type Bits = Vec<(String, Vec<[u32; 3]>)>;
+type Bits = Vec<(String, Visibility)>;
 
-/// Every technique's bits on `frame`, with fresh instances.
+/// Every technique's shadow term on `frame`, with fresh instances.
 fn all_bits(frame: &Frame) -> Bits {
     techniques::ALL
         .iter()
@@ -997,21 +995,16 @@ fn all_bits(frame: &Frame) -> Bits {
                 .render(frame)
                 .unwrap_or_else(|e| panic!("{name}: {e}"))
                 .visibility;
-            (
-                name.to_string(),
-                v.value
-                    .iter()
-                    .map(|c| c.to_array().map(f32::to_bits))
-                    .collect(),
-            )
+            (name.to_string(), v)
         })
         .collect()
 }
 
+/// Every technique's shadow terms in `a` and `b` equal bit for bit (an error image of
+/// each that is not).
 fn assert_same(what: &str, a: &Bits, b: &Bits) {
     for ((name, x), (_, y)) in a.iter().zip(b) {
-        let differ = x.iter().zip(y).filter(|(p, q)| p != q).count();
-        assert_eq!(differ, 0, "{what}: {name} differs on {differ} pixels");
+        assert_same_visibility(&format!("{what}: {name}"), x, y);
     }
 }
 

@@ -12,7 +12,8 @@
 //! slower than tracing the same shadow rays through a built BVH at 100K triangles, and at
 //! most half of BVH build plus trace at 1M (a scene that moves every frame).
 
-use super::{BenchArgs, BenchReport};
+use super::BenchReport;
+use crate::config::BenchConfig;
 use anyhow::{Context, Result};
 use serde_json::json;
 use shadowlab::compare::compare;
@@ -185,129 +186,168 @@ fn measure(count: usize, repeat: usize) -> Result<Column> {
 }
 
 /// Runs the suite.
-pub fn run(a: &BenchArgs) -> Result<BenchReport> {
-    let (counts, repeat): (&[usize], usize) = if a.quick {
-        (&COUNTS, 1)
-    } else {
-        (&COUNTS, a.repeat)
-    };
+pub fn run(a: &BenchConfig) -> Result<BenchReport> {
+    let repeat = if a.quick { 1 } else { a.repeat };
     let mut cols = Vec::new();
-    for &n in counts {
+    for &n in &COUNTS {
         let p = crate::progress::step(format!("afsm-scaling: {} triangles", short(n as f64)));
         cols.push(measure(n, repeat)?);
         p.finish_and_clear();
     }
-
     println!(
         "afsm-scaling: random-triangles, 1024x768, {} threads, median of {} run(s); paper: 1.6 GHz Mobile Pentium 4",
         rayon::current_num_threads(),
         repeat
     );
-    let mut head = format!("{:<30}", "");
-    for c in &cols {
-        head.push_str(&format!(
-            " | {:>21}",
-            format!("{} triangles", short(c.triangles as f64))
-        ));
-    }
-    println!("{head}");
-    let mut sub = format!("{:<30}", "");
-    for _ in &cols {
-        sub.push_str(&format!(" | {:>10} {:>10}", "paper", "ours"));
-    }
-    println!("{sub}");
-    let paper_col = |c: &Column| COUNTS.iter().position(|&n| n == c.triangles).unwrap_or(0);
-    let line = |label: &str, f: &dyn Fn(&Column) -> (String, String)| {
+    let table = Table { cols: &cols };
+    table.head();
+    table.paper_rows();
+    table.reference_rows();
+    table.embree_rows();
+    table.footer_rows();
+    print_targets(&cols);
+    Ok(BenchReport {
+        rows: cols.iter().map(row).collect(),
+    })
+}
+
+/// The paper's column for a measured one.
+fn paper_of(c: &Column) -> [f64; 8] {
+    PAPER[COUNTS.iter().position(|&n| n == c.triangles).unwrap_or(0)]
+}
+
+fn ms(x: f64) -> String {
+    format!("{x:.1}")
+}
+
+/// The printed table: a line per measure, a pair of cells (paper, ours) per column.
+struct Table<'c> {
+    cols: &'c [Column],
+}
+
+impl Table<'_> {
+    fn line(&self, label: &str, f: &dyn Fn(&Column) -> (String, String)) {
         let mut s = format!("{label:<30}");
-        for c in &cols {
+        for c in self.cols {
             let (p, o) = f(c);
             s.push_str(&format!(" | {p:>10} {o:>10}"));
         }
         println!("{s}");
-    };
-    let counts_row = |label: &str, i: usize, name: &'static str| {
-        line(label, &|c| {
-            (short(PAPER[paper_col(c)][i]), short(counter(&c.last, name)))
+    }
+
+    /// The column heads: triangle counts, then paper and ours.
+    fn head(&self) {
+        let mut head = format!("{:<30}", "");
+        for c in self.cols {
+            head.push_str(&format!(
+                " | {:>21}",
+                format!("{} triangles", short(c.triangles as f64))
+            ));
+        }
+        println!("{head}");
+        let mut sub = format!("{:<30}", "");
+        for _ in self.cols {
+            sub.push_str(&format!(" | {:>10} {:>10}", "paper", "ours"));
+        }
+        println!("{sub}");
+    }
+
+    /// The paper's rows: its counters and stage times beside ours.
+    fn paper_rows(&self) {
+        let counts_row = |label: &str, i: usize, name: &'static str| {
+            self.line(label, &|c| {
+                (short(paper_of(c)[i]), short(counter(&c.last, name)))
+            });
+        };
+        counts_row("#2D BSP nodes", 0, "bsp_nodes");
+        counts_row("#2D BSP nodes visited", 1, "nodes_visited");
+        counts_row("#nodes occlusion culled", 2, "nodes_occlusion_culled");
+        counts_row("#sampling points tested", 3, "samples_tested");
+        self.line("#shadow-ray tests in leaves", &|c| {
+            ("-".into(), short(counter(&c.last, "ray_tests")))
         });
-    };
-    counts_row("#2D BSP nodes", 0, "bsp_nodes");
-    counts_row("#2D BSP nodes visited", 1, "nodes_visited");
-    counts_row("#nodes occlusion culled", 2, "nodes_occlusion_culled");
-    counts_row("#sampling points tested", 3, "samples_tested");
-    line("#shadow-ray tests in leaves", &|c| {
-        ("-".into(), short(counter(&c.last, "ray_tests")))
-    });
-    line("#samples (lit, visible)", &|c| {
-        ("-".into(), short(counter(&c.last, "samples")))
-    });
-    let ms = |x: f64| format!("{x:.1}");
-    line("Transformation of samples ms", &|c| {
-        (ms(PAPER[paper_col(c)][4]), ms(c.transform_ms))
-    });
-    line("BSP construction ms", &|c| {
-        (ms(PAPER[paper_col(c)][5]), ms(c.bsp_ms))
-    });
-    line("Rasterization of blockers ms", &|c| {
-        (ms(PAPER[paper_col(c)][6]), ms(c.raster_ms))
-    });
-    line("Total time ms", &|c| {
-        (ms(PAPER[paper_col(c)][7]), ms(c.afsm_ms))
-    });
-    line("Speed-up over the paper", &|c| {
-        (
-            "1".into(),
-            format!("{:.1}x", PAPER[paper_col(c)][7] / c.afsm_ms),
-        )
-    });
-    line("Reference BVH build ms", &|c| {
-        ("-".into(), ms(c.bvh_build_ms))
-    });
-    line("Reference trace ms", &|c| ("-".into(), ms(c.trace_ms)));
-    line("afsm / trace", &|c| {
-        ("-".into(), format!("{:.2}", c.afsm_ms / c.trace_ms))
-    });
-    line("afsm / (build + trace)", &|c| {
-        (
-            "-".into(),
-            format!("{:.2}", c.afsm_ms / (c.bvh_build_ms + c.trace_ms)),
-        )
-    });
-    let embree = |c: &Column, f: &dyn Fn(&EmbreeTimes) -> String| {
-        ("-".to_string(), c.embree.as_ref().map_or("-".into(), f))
-    };
-    if cols.iter().any(|c| c.embree.is_some()) {
-        line("Embree BVH build ms", &|c| embree(c, &|e| ms(e.build_ms)));
-        line("Embree trace ms", &|c| embree(c, &|e| ms(e.trace_ms)));
-        line("afsm / Embree trace", &|c| {
+        self.line("#samples (lit, visible)", &|c| {
+            ("-".into(), short(counter(&c.last, "samples")))
+        });
+        self.line("Transformation of samples ms", &|c| {
+            (ms(paper_of(c)[4]), ms(c.transform_ms))
+        });
+        self.line("BSP construction ms", &|c| {
+            (ms(paper_of(c)[5]), ms(c.bsp_ms))
+        });
+        self.line("Rasterization of blockers ms", &|c| {
+            (ms(paper_of(c)[6]), ms(c.raster_ms))
+        });
+        self.line("Total time ms", &|c| (ms(paper_of(c)[7]), ms(c.afsm_ms)));
+        self.line("Speed-up over the paper", &|c| {
+            ("1".into(), format!("{:.1}x", paper_of(c)[7] / c.afsm_ms))
+        });
+    }
+
+    /// The ray-traced reference's times and afsm's ratios to them.
+    fn reference_rows(&self) {
+        self.line("Reference BVH build ms", &|c| {
+            ("-".into(), ms(c.bvh_build_ms))
+        });
+        self.line("Reference trace ms", &|c| ("-".into(), ms(c.trace_ms)));
+        self.line("afsm / trace", &|c| {
+            ("-".into(), format!("{:.2}", c.afsm_ms / c.trace_ms))
+        });
+        self.line("afsm / (build + trace)", &|c| {
+            (
+                "-".into(),
+                format!("{:.2}", c.afsm_ms / (c.bvh_build_ms + c.trace_ms)),
+            )
+        });
+    }
+
+    /// Embree's times and agreement, when it was timed.
+    fn embree_rows(&self) {
+        if self.cols.iter().all(|c| c.embree.is_none()) {
+            return;
+        }
+        let embree = |c: &Column, f: &dyn Fn(&EmbreeTimes) -> String| {
+            ("-".to_string(), c.embree.as_ref().map_or("-".into(), f))
+        };
+        self.line("Embree BVH build ms", &|c| embree(c, &|e| ms(e.build_ms)));
+        self.line("Embree trace ms", &|c| embree(c, &|e| ms(e.trace_ms)));
+        self.line("afsm / Embree trace", &|c| {
             embree(c, &|e| format!("{:.2}", c.afsm_ms / e.trace_ms))
         });
-        line("afsm / Embree (build + trace)", &|c| {
+        self.line("afsm / Embree (build + trace)", &|c| {
             embree(c, &|e| {
                 format!("{:.2}", c.afsm_ms / (e.build_ms + e.trace_ms))
             })
         });
-        line("Embree mismatch vs reference", &|c| {
+        self.line("Embree mismatch vs reference", &|c| {
             embree(c, &|e| format!("{:.5}%", e.mismatch_rate * 100.0))
         });
     }
-    line("Mismatch vs reference", &|c| {
-        ("-".into(), format!("{:.5}%", c.mismatch_rate * 100.0))
-    });
-    line("Memory MB", &|c| {
-        (
-            "-".into(),
-            format!("{:.1}", c.last.stats.memory_bytes as f64 / 1e6),
-        )
-    });
 
-    if cols.iter().all(|c| c.embree.is_none()) {
-        println!(
-            "Embree: not timed (build with `--features embree`, which needs Debian's libembree-dev)"
-        );
+    /// Mismatch and memory, and whether Embree was timed.
+    fn footer_rows(&self) {
+        self.line("Mismatch vs reference", &|c| {
+            ("-".into(), format!("{:.5}%", c.mismatch_rate * 100.0))
+        });
+        self.line("Memory MB", &|c| {
+            (
+                "-".into(),
+                format!("{:.1}", c.last.stats.memory_bytes as f64 / 1e6),
+            )
+        });
+        if self.cols.iter().all(|c| c.embree.is_none()) {
+            println!(
+                "Embree: not timed (build with `--features embree`, which needs Debian's libembree-dev)"
+            );
+        }
     }
+}
+
+/// Whether each column meets its targets.
+fn print_targets(cols: &[Column]) {
     println!("\ntargets:");
-    for c in &cols {
-        let speedup = PAPER[paper_col(c)][7] / c.afsm_ms;
+    for c in cols {
+        let speedup = paper_of(c)[7] / c.afsm_ms;
         let mut notes = vec![format!(
             "{:.1}x the paper (target {TARGET_SPEEDUP}x): {}",
             speedup,
@@ -344,42 +384,39 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
             notes.join("; ")
         );
     }
+}
 
-    let rows = cols
-        .iter()
-        .map(|c| {
-            let p = PAPER[paper_col(c)];
-            json!({
-                "triangles": c.triangles,
-                "afsm_ms": c.afsm_ms,
-                "transform_ms": c.transform_ms,
-                "bsp_ms": c.bsp_ms,
-                "raster_ms": c.raster_ms,
-                "bvh_build_ms": c.bvh_build_ms,
-                "trace_ms": c.trace_ms,
-                "embree_build_ms": c.embree.as_ref().map(|e| e.build_ms),
-                "embree_trace_ms": c.embree.as_ref().map(|e| e.trace_ms),
-                "embree_mismatch_rate": c.embree.as_ref().map(|e| e.mismatch_rate),
-                "paper_total_ms": p[7],
-                "paper_transform_ms": p[4],
-                "paper_bsp_ms": p[5],
-                "paper_raster_ms": p[6],
-                "speedup_vs_paper": p[7] / c.afsm_ms,
-                "bsp_nodes": counter(&c.last, "bsp_nodes"),
-                "nodes_visited": counter(&c.last, "nodes_visited"),
-                "nodes_occlusion_culled": counter(&c.last, "nodes_occlusion_culled"),
-                "samples_tested": counter(&c.last, "samples_tested"),
-                "ray_tests": counter(&c.last, "ray_tests"),
-                "samples": counter(&c.last, "samples"),
-                "paper_bsp_nodes": p[0],
-                "paper_nodes_visited": p[1],
-                "paper_nodes_occlusion_culled": p[2],
-                "paper_samples_tested": p[3],
-                "covered_pixels": c.covered,
-                "mismatch_rate": c.mismatch_rate,
-                "memory_bytes": c.last.stats.memory_bytes,
-            })
-        })
-        .collect();
-    Ok(BenchReport { rows })
+/// A column as its JSON row.
+fn row(c: &Column) -> serde_json::Value {
+    let p = paper_of(c);
+    json!({
+        "triangles": c.triangles,
+        "afsm_ms": c.afsm_ms,
+        "transform_ms": c.transform_ms,
+        "bsp_ms": c.bsp_ms,
+        "raster_ms": c.raster_ms,
+        "bvh_build_ms": c.bvh_build_ms,
+        "trace_ms": c.trace_ms,
+        "embree_build_ms": c.embree.as_ref().map(|e| e.build_ms),
+        "embree_trace_ms": c.embree.as_ref().map(|e| e.trace_ms),
+        "embree_mismatch_rate": c.embree.as_ref().map(|e| e.mismatch_rate),
+        "paper_total_ms": p[7],
+        "paper_transform_ms": p[4],
+        "paper_bsp_ms": p[5],
+        "paper_raster_ms": p[6],
+        "speedup_vs_paper": p[7] / c.afsm_ms,
+        "bsp_nodes": counter(&c.last, "bsp_nodes"),
+        "nodes_visited": counter(&c.last, "nodes_visited"),
+        "nodes_occlusion_culled": counter(&c.last, "nodes_occlusion_culled"),
+        "samples_tested": counter(&c.last, "samples_tested"),
+        "ray_tests": counter(&c.last, "ray_tests"),
+        "samples": counter(&c.last, "samples"),
+        "paper_bsp_nodes": p[0],
+        "paper_nodes_visited": p[1],
+        "paper_nodes_occlusion_culled": p[2],
+        "paper_samples_tested": p[3],
+        "covered_pixels": c.covered,
+        "mismatch_rate": c.mismatch_rate,
+        "memory_bytes": c.last.stats.memory_bytes,
+    })
 }

@@ -10,14 +10,15 @@
 //! runs. The paper (1 GHz Pentium III, GeForce2 Ultra) measured 203 ms per ASM frame
 //! against 117 ms for the 2048² map, a ratio of 1.74; the target is the same ratio or less.
 
-use super::{BenchArgs, BenchReport};
+use super::BenchReport;
+use crate::config::BenchConfig;
 use anyhow::{Context, Result};
 use serde_json::json;
 use shadowlab::camera::Camera;
 use shadowlab::compare::compare;
 use shadowlab::math::vec2;
 use shadowlab::reference::Reference;
-use shadowlab::techniques::{self, Frame, ShadowTechnique, Shadows};
+use shadowlab::techniques::{self, Frame, ShadowTechnique, Shadows, Visibility};
 use shadowlab::view::ViewSamples;
 use std::time::Instant;
 
@@ -60,8 +61,27 @@ struct Cell {
     evicted: f64,
 }
 
+/// The walkthrough's measurements: per frame, `sm`'s cell and one cell per budget.
+struct Walk {
+    triangles: usize,
+    frames: usize,
+    sm: Vec<Cell>,
+    asm: Vec<Vec<Cell>>,
+}
+
 /// Runs the suite.
-pub fn run(a: &BenchArgs) -> Result<BenchReport> {
+pub fn run(a: &BenchConfig) -> Result<BenchReport> {
+    let frames = if a.quick { QUICK_FRAMES } else { FRAMES };
+    let repeat = if a.quick { 1 } else { a.repeat.max(1) };
+    let walk = walk(frames, repeat)?;
+    let rows = print_frames(&walk);
+    print_means(&walk);
+    Ok(BenchReport { rows })
+}
+
+/// Renders the room along its path with `sm` and `asm` at each budget, measuring every
+/// frame against the reference.
+fn walk(frames: usize, repeat: usize) -> Result<Walk> {
     let scene =
         shadowlab::scene::load("room", &Default::default()).context("generating the room scene")?;
     let light = scene.light.context("the room scene has no light")?;
@@ -72,8 +92,6 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
     let mut base: Camera = scene.camera.context("the room scene has no camera")?;
     base.width = SIDE;
     base.height = SIDE;
-    let frames = if a.quick { QUICK_FRAMES } else { FRAMES };
-    let repeat = if a.quick { 1 } else { a.repeat.max(1) };
 
     let mut sm = techniques::create("sm")?;
     sm.set_param("resolution", &SM_RESOLUTION.to_string())?;
@@ -85,8 +103,12 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
     }
     let reference = Reference::build(&scene);
 
-    let mut sm_cells = Vec::new();
-    let mut asm_cells: Vec<Vec<Cell>> = vec![Vec::new(); BUDGETS.len()];
+    let mut walk = Walk {
+        triangles: scene.len(),
+        frames,
+        sm: Vec::new(),
+        asm: vec![Vec::new(); BUDGETS.len()],
+    };
     let bar = crate::progress::bar(frames as u64, "asm-walkthrough");
     for i in 0..frames {
         let mut camera = path.camera_at(&base, i, frames);
@@ -95,50 +117,72 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
         let mut frame = Frame::new(&scene, &camera, &light, &view);
         frame.index = i;
         let truth = reference.visibility(&frame, &[vec2(0.5, 0.5)]);
-
-        let mut times = Vec::new();
-        let mut last = None;
-        for _ in 0..repeat {
-            let t0 = Instant::now();
-            let s = sm.render(&frame)?;
-            times.push(t0.elapsed().as_secs_f64() * 1e3);
-            last = Some(s);
-        }
-        times.sort_by(f64::total_cmp);
-        let s = last.expect("at least one run");
-        sm_cells.push(Cell {
-            ms: times[times.len() / 2],
-            memory: s.stats.memory_bytes,
-            tree: s.stats.memory_bytes,
-            mismatch: compare(&view, &s.visibility, &truth).mismatch_rate,
-            nodes: 0.0,
-            effective: SM_RESOLUTION as f64,
-            refined: 0.0,
-            evicted: 0.0,
-        });
-        for (t, cells) in asms.iter_mut().zip(asm_cells.iter_mut()) {
-            let t0 = Instant::now();
-            let s = t.render(&frame)?;
-            let ms = t0.elapsed().as_secs_f64() * 1e3;
-            cells.push(Cell {
-                ms,
-                memory: s.stats.memory_bytes,
-                tree: counter(&s, "tree_bytes") as u64,
-                mismatch: compare(&view, &s.visibility, &truth).mismatch_rate,
-                nodes: counter(&s, "nodes"),
-                effective: counter(&s, "effective_resolution_used"),
-                refined: counter(&s, "cells_refined"),
-                evicted: counter(&s, "nodes_evicted"),
-            });
+        walk.sm.push(sm_cell(sm.as_mut(), &frame, &truth, repeat)?);
+        for (t, cells) in asms.iter_mut().zip(walk.asm.iter_mut()) {
+            cells.push(asm_cell(t.as_mut(), &frame, &truth)?);
         }
         bar.inc(1);
     }
     bar.finish_and_clear();
+    Ok(walk)
+}
 
+/// The standard map on one frame: the median time of `repeat` runs.
+fn sm_cell(
+    sm: &mut dyn ShadowTechnique,
+    frame: &Frame,
+    truth: &Visibility,
+    repeat: usize,
+) -> Result<Cell> {
+    let mut times = Vec::new();
+    let mut last = None;
+    for _ in 0..repeat {
+        let t0 = Instant::now();
+        let s = sm.render(frame)?;
+        times.push(t0.elapsed().as_secs_f64() * 1e3);
+        last = Some(s);
+    }
+    times.sort_by(f64::total_cmp);
+    let s = last.expect("at least one run");
+    Ok(Cell {
+        ms: times[times.len() / 2],
+        memory: s.stats.memory_bytes,
+        tree: s.stats.memory_bytes,
+        mismatch: compare(frame.view, &s.visibility, truth).mismatch_rate,
+        nodes: 0.0,
+        effective: SM_RESOLUTION as f64,
+        refined: 0.0,
+        evicted: 0.0,
+    })
+}
+
+/// The adaptive map on one frame: a single run, its tree kept along the path.
+fn asm_cell(t: &mut dyn ShadowTechnique, frame: &Frame, truth: &Visibility) -> Result<Cell> {
+    let t0 = Instant::now();
+    let s = t.render(frame)?;
+    let ms = t0.elapsed().as_secs_f64() * 1e3;
+    Ok(Cell {
+        ms,
+        memory: s.stats.memory_bytes,
+        tree: counter(&s, "tree_bytes") as u64,
+        mismatch: compare(frame.view, &s.visibility, truth).mismatch_rate,
+        nodes: counter(&s, "nodes"),
+        effective: counter(&s, "effective_resolution_used"),
+        refined: counter(&s, "cells_refined"),
+        evicted: counter(&s, "nodes_evicted"),
+    })
+}
+
+fn mb(b: u64) -> f64 {
+    b as f64 / (1024.0 * 1024.0)
+}
+
+/// Prints the per-frame table; returns its rows, one per frame and budget.
+fn print_frames(walk: &Walk) -> Vec<serde_json::Value> {
     println!(
-        "asm-walkthrough: room, {} triangles, {SIDE}×{SIDE}, {frames} frames along its path; times in ms \
+        "asm-walkthrough: room, {} triangles, {SIDE}×{SIDE}, {} frames along its path; times in ms \
          (camera pass excluded), MB = the adaptive tree's MiB (what the budget bounds), mismatch in % of covered pixels",
-        scene.len()
+        walk.triangles, walk.frames
     );
     println!(
         "{:>5} {:>8} {:>7} {:>7} | {:>8} {:>6} {:>7} {:>6} {:>9} | {:>8} {:>6} {:>7} {:>6} {:>9}",
@@ -158,10 +202,9 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
         "eff"
     );
     let mut rows = Vec::new();
-    let mb = |b: u64| b as f64 / (1024.0 * 1024.0);
-    for i in 0..frames {
-        let s = sm_cells[i];
-        let (x, y) = (asm_cells[0][i], asm_cells[1][i]);
+    for i in 0..walk.frames {
+        let s = walk.sm[i];
+        let (x, y) = (walk.asm[0][i], walk.asm[1][i]);
         println!(
             "{i:>5} {:>8.1} {:>7.1} {:>7.4} | {:>8.1} {:>6.2} {:>7.4} {:>6.0} {:>9.0} | {:>8.1} {:>6.2} {:>7.4} {:>6.0} {:>9.0}",
             s.ms,
@@ -196,18 +239,23 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
             }));
         }
     }
-    let sm_ms = mean(sm_cells.iter().map(|c| c.ms));
-    let sm_mis = mean(sm_cells.iter().map(|c| c.mismatch));
+    rows
+}
+
+/// Prints the means over the walkthrough beside the paper's times.
+fn print_means(walk: &Walk) {
+    let sm_ms = mean(walk.sm.iter().map(|c| c.ms));
+    let sm_mis = mean(walk.sm.iter().map(|c| c.mismatch));
     println!();
     println!(
         "means over the walkthrough (frame 0, which builds the root and calibrates, in brackets):"
     );
     println!(
         "  sm 2048²: {sm_ms:.1} ms, {:.1} MB, mismatch {:.4}%   | paper: {PAPER_SM_MS:.0} ms, 16 MB",
-        mb(sm_cells[0].memory),
+        mb(walk.sm[0].memory),
         sm_mis * 100.0
     );
-    for (b, cells) in BUDGETS.iter().zip(&asm_cells) {
+    for (b, cells) in BUDGETS.iter().zip(&walk.asm) {
         let ms = mean(cells.iter().map(|c| c.ms));
         let later = mean(cells.iter().skip(1).map(|c| c.ms));
         let most = cells.iter().map(|c| c.tree).max().unwrap_or(0);
@@ -231,5 +279,4 @@ pub fn run(a: &BenchArgs) -> Result<BenchReport> {
             mean(cells.iter().map(|c| c.mismatch)) * 100.0,
         );
     }
-    Ok(BenchReport { rows })
 }

@@ -11,7 +11,8 @@
 //! ratio is the one comparable to the paper's ratio, printed beside ours; the technique-only
 //! ratio is the stricter one.
 
-use super::{median_ms, BenchArgs, BenchReport};
+use super::{median_ms, BenchReport};
+use crate::config::BenchConfig;
 use anyhow::{Context, Result};
 use serde_json::json;
 use shadowlab::techniques::{self, Frame};
@@ -58,7 +59,7 @@ fn blur_name(b: u32) -> String {
 }
 
 /// Runs the suite.
-pub fn run(a: &BenchArgs) -> Result<BenchReport> {
+pub fn run(a: &BenchConfig) -> Result<BenchReport> {
     let scene = shadowlab::scene::load("fence-far", &Default::default())
         .context("loading the fence-far scene")?;
     let mut camera = scene.camera.context("fence-far has no camera")?;

@@ -18,8 +18,9 @@
 //! [`MSM_TIME_TARGET`]× `vsm`'s, `lispsm` at most [`LISPSM_TIME_TARGET`]× `sm`'s; on `street`
 //! at 16 MiB (one 2048² map) `cascaded` at most a quarter of `sm`'s mismatch.
 
-use super::{median_ms, BenchArgs, BenchReport};
-use crate::plots::{self, Axis, Point, Series};
+use super::{median_ms, BenchReport};
+use crate::charts::{self, Axis, Point, Series};
+use crate::config::BenchConfig;
 use anyhow::{Context, Result};
 use serde_json::{json, Value};
 use shadowlab::compare::compare;
@@ -110,7 +111,7 @@ fn timed(
 }
 
 /// Runs the suite.
-pub fn run(a: &BenchArgs) -> Result<BenchReport> {
+pub fn run(a: &BenchConfig) -> Result<BenchReport> {
     let (scenes, budgets, size, repeat): (&[&str], &[u64], (u32, u32), usize) = if a.quick {
         (&QUICK_SCENES, &[4], (512, 384), 1)
     } else {
@@ -317,7 +318,7 @@ fn write_plots(
             .iter()
             .flat_map(|se| se.points.iter().map(|p| p.0))
             .collect();
-        let svg = plots::lines(
+        let svg = charts::lines(
             &format!("{s}: error against memory"),
             &Axis::auto("shadow memory (MiB)", &mem, 8.0),
             &Axis::linear("mean absolute error (visibility, 0–1)"),
@@ -348,7 +349,7 @@ fn write_plots(
             })
             .collect();
         let times: Vec<f64> = points.iter().map(|p| p.x).collect();
-        let svg = plots::scatter(
+        let svg = charts::scatter(
             &format!("{s}: error against time at {mid} MiB (◆ marks the Pareto front)"),
             &Axis::auto("frame time of the technique (ms)", &times, 10.0),
             &Axis::linear("mean absolute error (visibility, 0–1)"),

@@ -18,7 +18,8 @@
 //! map, and the overhead is a depth read-back (10 ms at 640×480 on their machine) plus the
 //! set-up of one projection matrix.
 
-use super::{median_ms, BenchArgs, BenchReport};
+use super::{median_ms, BenchReport};
+use crate::config::BenchConfig;
 use anyhow::{Context, Result};
 use serde_json::json;
 use shadowlab::compare::compare;
@@ -89,7 +90,7 @@ fn perpendicular_light(light: Option<Light>, forward: Vec3) -> Vec3 {
 }
 
 /// Runs the suite.
-pub fn run(a: &BenchArgs) -> Result<BenchReport> {
+pub fn run(a: &BenchConfig) -> Result<BenchReport> {
     let (scenes, angles, size, repeat): (&[&str], &[f32], (u32, u32), usize) = if a.quick {
         (&["chessboard"], &QUICK_ANGLES, (512, 384), a.repeat.min(3))
     } else {

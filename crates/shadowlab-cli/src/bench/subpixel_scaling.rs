@@ -10,7 +10,8 @@
 //! `afsm` is not available the ray-traced centre sample (`raytrace`) stands in for it, and
 //! the `baseline` field says so.
 
-use super::{median_ms, BenchArgs, BenchReport};
+use super::{median_ms, BenchReport};
+use crate::config::BenchConfig;
 use crate::progress;
 use anyhow::{Context, Result};
 use serde_json::{json, Value};
@@ -40,7 +41,7 @@ fn jittered(camera: &Camera, dx: f32, dy: f32) -> Camera {
 }
 
 /// Runs the suite.
-pub fn run(a: &BenchArgs) -> Result<BenchReport> {
+pub fn run(a: &BenchConfig) -> Result<BenchReport> {
     let (width, height, counts): (u32, u32, &[u32]) = if a.quick {
         (512, 384, &[1, 8, 32])
     } else {

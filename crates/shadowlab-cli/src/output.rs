@@ -1,11 +1,22 @@
-//! The files a command will write, checked before any work: each has the extension of
+//! Everything that writes files, below the commands that decide what to write.
+//!
+//! The files a command will write are checked before any work: each has the extension of
 //! its documented format, no two name the same file, none replaces an existing file
 //! without `--force`, none goes through a dangling symbolic link, and each one's folder
-//! exists. A report folder is recognised by a marker file only shadowlab writes.
+//! exists. A report folder is recognised by a marker file only shadowlab writes. Then:
+//! file names made from run labels ([`slug`]), pretty JSON ([`write_json`]), folders
+//! ([`create_dir`]), PNG images ([`save_png`]) and animated GIFs written frame by frame
+//! ([`Animation`]). A write that fails once the checks have passed is an internal failure
+//! (exit status 1), not input.
 
-use crate::commands::BadInput;
-use anyhow::Result;
+use crate::failure::bad_input as bad;
+use anyhow::{Context, Result};
+use image::codecs::gif::{GifEncoder, Repeat};
+use image::{imageops, Delay, RgbImage};
+use serde::Serialize;
 use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 /// The file `compare` writes into its report folder, and only there: a folder holding it
@@ -35,10 +46,6 @@ impl Planned {
             extensions,
         }
     }
-}
-
-fn bad(msg: String) -> anyhow::Error {
-    BadInput(msg).into()
 }
 
 /// The absolute form of `path` that two spellings of one file share: its folder made
@@ -165,9 +172,120 @@ pub fn check_report_dir(dir: &Path, force: bool) -> Result<()> {
 
 /// Creates the report folder (checked by [`check_report_dir`]) with its marker.
 pub fn create_report_dir(dir: &Path) -> Result<()> {
-    use anyhow::Context;
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    create_dir(dir)?;
     let marker = dir.join(REPORT_MARKER);
     std::fs::write(&marker, REPORT_MARKER_TEXT)
         .with_context(|| format!("cannot write {}", marker.display()))
+}
+
+/// Creates a folder and its parents.
+pub fn create_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))
+}
+
+/// The file of frame `i` of a sequence written beside `output`: `OUT-NNNN.png`.
+pub fn frame_file(output: &Path, i: usize) -> PathBuf {
+    let stem = output.with_extension("");
+    PathBuf::from(format!("{}-{i:04}.png", stem.display()))
+}
+
+/// File-name-safe form of a run label.
+pub fn slug(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// Writes `v` as pretty JSON with a final newline.
+pub fn write_json(path: &Path, v: &impl Serialize) -> Result<()> {
+    let text = serde_json::to_string_pretty(v)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    std::fs::write(path, text + "\n").with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Writes an image as PNG. It is encoded in memory and then written in one go, so that a
+/// write that fails (a full disk, a file size limit) is an error here rather than lost in
+/// the flush of a dropped buffer, as it is when `image` saves to a file; the bytes are the
+/// same as its.
+pub fn save_png(img: &RgbImage, path: &Path) -> Result<()> {
+    let mut png = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut png, image::ImageFormat::Png)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    std::fs::write(path, png.into_inner())
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Display time of one animation frame in milliseconds (10 frames per second).
+pub const ANIMATION_FRAME_MS: u32 = 100;
+/// Animations are scaled down to at most this width: GIF size grows with the pixel count
+/// and its 256-colour palette hides fine detail anyway; the numbered PNGs keep full size.
+pub const ANIMATION_MAX_WIDTH: u32 = 640;
+/// GIF palette quantization speed (1 = best colours, 30 = fastest): 10 keeps shadow
+/// gradients without banding at a few tens of milliseconds per frame.
+const ANIMATION_QUANTIZE_SPEED: i32 = 10;
+
+/// Writes an animated GIF frame by frame, so a walkthrough never sits in memory.
+pub struct Animation {
+    encoder: GifEncoder<BufWriter<File>>,
+    path: PathBuf,
+}
+
+impl Animation {
+    /// Starts an endlessly looping animation at `path`.
+    pub fn create(path: &Path) -> Result<Self> {
+        let file =
+            File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+        let mut encoder =
+            GifEncoder::new_with_speed(BufWriter::new(file), ANIMATION_QUANTIZE_SPEED);
+        encoder
+            .set_repeat(Repeat::Infinite)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(Animation {
+            encoder,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// Appends one frame, scaled down to [`ANIMATION_MAX_WIDTH`] if wider.
+    pub fn push(&mut self, img: &RgbImage) -> Result<()> {
+        let rgba = if img.width() > ANIMATION_MAX_WIDTH {
+            let h = ((img.height() as u64 * ANIMATION_MAX_WIDTH as u64) / img.width() as u64).max(1)
+                as u32;
+            image::DynamicImage::ImageRgb8(imageops::resize(
+                img,
+                ANIMATION_MAX_WIDTH,
+                h,
+                imageops::FilterType::Triangle,
+            ))
+            .into_rgba8()
+        } else {
+            image::DynamicImage::ImageRgb8(img.clone()).into_rgba8()
+        };
+        let frame = image::Frame::from_parts(
+            rgba,
+            0,
+            0,
+            Delay::from_numer_denom_ms(ANIMATION_FRAME_MS, 1),
+        );
+        self.encoder
+            .encode_frame(frame)
+            .with_context(|| format!("cannot write {}", self.path.display()))
+    }
+
+    /// Finishes the file.
+    pub fn finish(self) -> Result<()> {
+        let path = self.path;
+        // The GIF trailer is written when the encoder drops; the buffer flushes with it.
+        drop(self.encoder);
+        if !path.is_file() {
+            anyhow::bail!("cannot write {}", path.display());
+        }
+        Ok(())
+    }
 }

@@ -1,6 +1,7 @@
-//! The report's plots as SVG, drawn with `plotters`: labelled scatter plots (error against
-//! time, one point per technique) and line plots (error or time against a swept parameter,
-//! time per frame). Every axis carries a description with its unit.
+//! Charts as SVG, drawn with `plotters`, for the report's plots and the bench suites':
+//! labelled scatter plots (error against time, one point per technique) and line plots
+//! (error or time against a swept parameter, time per frame). Every axis carries a
+//! description with its unit.
 //!
 //! Axes are linear or logarithmic (for quantities spanning decades, such as frame times
 //! from a shadow map to the ray tracer), or categorical when a swept parameter is not a

@@ -1,0 +1,194 @@
+//! The command line as `clap` parses it: every command, flag and default, and nothing
+//! else. What the flags mean together — which values are allowed, which files may be
+//! written, which scene is loaded — is decided by `config`, before any work starts.
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+/// Shadow algorithms — alias-free, adaptive, sub-pixel, perspective and convolution shadow
+/// maps beside standard maps, PCF and variance maps, and the ones engines ship (cascaded,
+/// light-space perspective, exponential variance and moment shadow maps) — measured
+/// against ray tracing. `csm` (or `convolution`) is the convolution shadow map; cascaded
+/// shadow maps are `cascaded`.
+#[derive(Parser, Debug)]
+#[command(name = "shadowlab", version, about, long_about = None)]
+pub struct Cli {
+    /// Worker threads (default: all cores). Results are identical for any count.
+    #[arg(long, global = true)]
+    pub threads: Option<usize>,
+    /// No progress bars or status lines.
+    #[arg(long, global = true)]
+    pub quiet: bool,
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// The commands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render one technique's shadows to an image.
+    Render(RenderArgs),
+    /// Run several techniques on one frame, measure them against the ray-traced
+    /// reference and write a report.
+    Compare(CompareArgs),
+    /// List the built-in scenes.
+    Scenes,
+    /// List the techniques with their parameters: key, default, range and meaning.
+    Techniques(TechniquesArgs),
+    /// Run a benchmark suite that reproduces a paper's table.
+    Bench(BenchArgs),
+}
+
+/// The scene-related flags `render` and `compare` share.
+#[derive(clap::Args, Debug, Clone)]
+pub struct SceneArgs {
+    /// A built-in scene name (see `shadowlab scenes`), a `.toml` scene file, or a mesh
+    /// (`.obj`, `.ply`, `.gltf`, `.glb`).
+    #[arg(long, default_value = "bunny")]
+    pub scene: String,
+    /// A built-in scene's parameter, e.g. `count=1000000` for random-triangles.
+    #[arg(long = "scene-param", value_name = "K=V")]
+    pub scene_params: Vec<String>,
+    /// Image width in pixels.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Camera override: `EX,EY,EZ:TX,TY,TZ[:FOV_DEG]`.
+    #[arg(long, value_name = "EYE:TARGET[:FOV]")]
+    pub camera: Option<String>,
+    /// Move the camera along its view ray to F times its distance from its target.
+    #[arg(
+        long = "camera-distance",
+        value_name = "F",
+        allow_negative_numbers = true
+    )]
+    pub camera_distance: Option<f32>,
+    /// Which of the scene's cameras to use: a glTF file's camera nodes in the order its
+    /// node hierarchy is walked (0 = the first).
+    #[arg(long = "camera-index", value_name = "N", default_value_t = 0)]
+    pub camera_index: usize,
+    /// Light override: `directional:DX,DY,DZ`, `point:X,Y,Z` or `spot:X,Y,Z:TX,TY,TZ:FOV_DEG`.
+    #[arg(long)]
+    pub light: Option<String>,
+    /// Render the camera path (or a still camera) this many times; reports describe the last.
+    #[arg(long, default_value_t = 1)]
+    pub frames: usize,
+    /// Shade the surfaces behind semi-transparent ones too, each with its own shadow term,
+    /// and composite them (techniques afsm and raytrace; the others shade the nearest
+    /// surface only).
+    #[arg(long)]
+    pub layers: bool,
+    /// Let a scene file's references (glTF buffer URIs, OBJ `mtllib`, TOML mesh `file`)
+    /// name files outside its folder; by default they are refused.
+    #[arg(long = "allow-outside-scene-dir")]
+    pub allow_outside_scene_dir: bool,
+}
+
+/// `shadowlab render`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// The technique: sm, pcf, psm, lispsm, cascaded, asm, afsm, subpixel, csm (convolution
+    /// shadow map, also spelled `convolution`), vsm, evsm, msm or raytrace. `cascaded` is the
+    /// cascaded shadow map; `csm` keeps its meaning, the convolution shadow map.
+    #[arg(long, default_value = "afsm")]
+    pub technique: String,
+    /// A technique parameter, e.g. `resolution=2048` (`shadowlab techniques` lists them).
+    #[arg(long = "param", value_name = "K=V")]
+    pub params: Vec<String>,
+    /// The shaded image (PNG).
+    #[arg(long, default_value = "shadowlab.png")]
+    pub output: PathBuf,
+    /// The raw shadow term as float32 EXR (R, G, B = transmittance, A = coverage).
+    #[arg(long)]
+    pub visibility: Option<PathBuf>,
+    /// Timings, counters, the resolved camera and light, and every parameter, as JSON.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// The world-space triangles the renderer used, as OBJ (one `o` group per material).
+    #[arg(long = "export-scene")]
+    pub export_scene: Option<PathBuf>,
+    /// Write the technique's intermediate images into this folder.
+    #[arg(long)]
+    pub dump: Option<PathBuf>,
+    /// Overwrite existing output files.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `shadowlab compare`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Comma-separated technique names, or `all` (see `render --help`; `csm` and
+    /// `convolution` are the convolution shadow map, `cascaded` the cascaded shadow maps).
+    #[arg(long, default_value = "all")]
+    pub techniques: String,
+    /// A technique parameter prefixed with its technique: `sm.resolution=4096`.
+    #[arg(long = "param", value_name = "T.K=V")]
+    pub params: Vec<String>,
+    /// One result per value of a technique parameter: `sm.resolution=512,1024,2048`.
+    #[arg(long = "sweep", value_name = "T.K=V1,V2,...")]
+    pub sweeps: Vec<String>,
+    /// Primary rays per pixel of the reference (at sub-pixel positions when > 1), for every
+    /// technique. Default: 1 for hard-shadow techniques, 16 for those that filter or
+    /// anti-alias (pcf, subpixel, csm, vsm), each judged against its own.
+    #[arg(long = "reference-spp")]
+    pub reference_spp: Option<u32>,
+    /// Sub-pixel pattern of the supersampled reference: grid or rotated-grid.
+    #[arg(long = "reference-pattern", default_value = "grid")]
+    pub reference_pattern: String,
+    /// The report folder.
+    #[arg(long, default_value = "shadowlab-report")]
+    pub out: PathBuf,
+    /// Write each technique's intermediate images into DIR/dump.
+    #[arg(long)]
+    pub dump: bool,
+    /// Allow writing into a non-empty folder that is not an earlier report.
+    #[arg(long)]
+    pub force: bool,
+}
+
+impl CompareArgs {
+    /// What `shadowlab` with no arguments runs: compare on the default scene.
+    pub fn default_run() -> Self {
+        #[derive(Parser)]
+        struct Wrap {
+            #[command(flatten)]
+            c: CompareArgs,
+        }
+        Wrap::parse_from(["shadowlab"]).c
+    }
+}
+
+/// `shadowlab techniques`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct TechniquesArgs {
+    /// One technique to describe (default: every technique).
+    pub name: Option<String>,
+}
+
+/// `shadowlab bench`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// The suite: afsm-scaling, subpixel-scaling, csm-table, asm-walkthrough, psm-lights,
+    /// engines.
+    pub suite: String,
+    /// Also write the rows as JSON to this file.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// A reduced run that finishes in under a minute on two cores.
+    #[arg(long)]
+    pub quick: bool,
+    /// Write the suite's plots (SVG) into this folder (`engines`: error against memory, and
+    /// error against time with the Pareto front marked, per scene).
+    #[arg(long)]
+    pub plots: Option<PathBuf>,
+    /// Runs per measurement (the median is reported).
+    #[arg(long, default_value_t = 3)]
+    pub repeat: usize,
+}

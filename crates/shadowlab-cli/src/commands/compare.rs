@@ -1,0 +1,389 @@
+//! `shadowlab compare` (and `shadowlab` with no arguments): several techniques on one
+//! frame, each measured against the ray-traced reference, written up as a report.
+//!
+//! The flow, one stage per function below: create the report folder; render every frame
+//! with every technique (a still view until the progressive ones converge; a sequence
+//! frame by frame, each frame's image and the animations written as they come); trace the
+//! references on the last frame; measure each run against its reference and write its
+//! images; gather everything into [`Metrics`]; write `metrics.json` and the report from
+//! it; print the terminal table.
+
+use crate::config::{CompareConfig, ReferencePlan, Setup};
+use crate::frames::{Pass, Run, MAX_STILL_FRAMES};
+use crate::metrics::{
+    self, CameraRecord, Figures, LightRecord, Metrics, ReferenceImage, ReferenceSummary, RunResult,
+    SceneRecord, Sweep,
+};
+use crate::output::{self, slug, Animation};
+use crate::{progress, report};
+use anyhow::Result;
+use shadowlab::compare::{compare as measure, compare_samples};
+use shadowlab::frame::DumpDir;
+use shadowlab::math::Vec3;
+use shadowlab::reference::Reference;
+use shadowlab::shade::{self, RgbImage};
+use shadowlab::techniques::{Frame, Visibility};
+use shadowlab::view::ViewSamples;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Runs `compare`.
+pub fn run(cfg: CompareConfig) -> Result<()> {
+    let CompareConfig {
+        runs,
+        references,
+        setup,
+        out,
+        dump,
+    } = cfg;
+    let mut runs: Vec<Run> = runs.into_iter().map(Run::new).collect();
+    let mut folder = Folder::create(&out, dump, &setup, &runs)?;
+    let pass = render_frames(&setup, &mut runs, &mut folder)?;
+    let traced = trace_references(&setup, &pass, &references);
+    let bar = progress::bar(runs.len() as u64 + 1, "writing images");
+    let (ref_img, reference_images) = write_references(&setup, &pass, &folder, &traced)?;
+    bar.inc(1);
+    let mut results = Vec::new();
+    for run in &runs {
+        bar.set_message(format!("writing {}", run.label));
+        let measured = Measured {
+            setup: &setup,
+            pass: &pass,
+            traced: &traced,
+            reference_image: &ref_img,
+            dir: &out,
+        };
+        results.push(measured.result(run, references.spp_for(run.technique.name()))?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let metrics = gather(
+        &setup,
+        &pass,
+        &references,
+        &traced,
+        &folder,
+        reference_images,
+        results,
+    );
+    let pb = progress::step("writing report");
+    output::write_json(&out.join("metrics.json"), &metrics)?;
+    report::write(&out, &metrics)?;
+    pb.finish_and_clear();
+    if !progress::quiet() {
+        print_table(&metrics);
+        println!("report: {}", out.join("index.html").display());
+    }
+    Ok(())
+}
+
+/// The report folder while the runs fill it: where the techniques dump, and the animation
+/// of each run of a sequence.
+struct Folder {
+    dir: PathBuf,
+    dump: Option<PathBuf>,
+    animations: Vec<Animation>,
+}
+
+impl Folder {
+    /// Creates the folder with its marker, the dump folder when asked for, and for a
+    /// sequence `DIR/frames/` and an animated `DIR/<run>.gif` per run.
+    fn create(dir: &Path, dump: bool, setup: &Setup, runs: &[Run]) -> Result<Self> {
+        output::create_report_dir(dir)?;
+        let dump = dump.then(|| dir.join("dump"));
+        if let Some(d) = &dump {
+            output::create_dir(d)?;
+        }
+        let mut animations = Vec::new();
+        if setup.frames > 1 {
+            output::create_dir(&dir.join("frames"))?;
+            for run in runs {
+                animations.push(Animation::create(
+                    &dir.join(format!("{}.gif", slug(&run.label))),
+                )?);
+            }
+        }
+        Ok(Folder {
+            dir: dir.to_path_buf(),
+            dump,
+            animations,
+        })
+    }
+}
+
+/// Renders every frame with every run; a sequence writes `DIR/frames/<run>-NNNN.png` and
+/// each run's animation as it goes. Returns the last frame's camera pass.
+fn render_frames(setup: &Setup, runs: &mut [Run], folder: &mut Folder) -> Result<Pass> {
+    let frames = setup.frames;
+    let bar = progress::bar((frames * runs.len()) as u64, "techniques");
+    let mut last = None;
+    let dump = folder.dump.as_deref().map(DumpDir::new);
+    for i in 0..frames {
+        bar.set_message(format!("frame {}/{frames} camera pass", i + 1));
+        let pass = Pass::render(setup, i)?;
+        let frame = pass.frame(setup, i, dump.as_ref());
+        for (r, run) in runs.iter_mut().enumerate() {
+            bar.set_message(format!("frame {}/{frames} {}", i + 1, run.label));
+            run.render(&frame, frames == 1)?;
+            if let Some(anim) = folder.animations.get_mut(r) {
+                let img = pass.shade(setup, &run.result().0);
+                let file = format!("frames/{}-{i:04}.png", slug(&run.label));
+                output::save_png(&img, &folder.dir.join(file))?;
+                anim.push(&img)?;
+            }
+            bar.inc(1);
+        }
+        last = Some(pass);
+    }
+    bar.finish_and_clear();
+    for anim in std::mem::take(&mut folder.animations) {
+        anim.finish()?;
+    }
+    Ok(last.expect("at least one frame"))
+}
+
+/// One traced reference: samples per pixel, the shadow term, the trace time.
+struct Traced {
+    spp: u32,
+    vis: Visibility,
+    ms: f64,
+}
+
+/// The references of the last frame, the most samples first, with the BVH build and
+/// total time and, with `--layers`, the layer samples' shadow terms.
+struct References {
+    each: Vec<Traced>,
+    bvh_ms: f64,
+    total_ms: f64,
+    layers: Option<Vec<Vec3>>,
+}
+
+impl References {
+    /// The reference traced with `spp` samples per pixel.
+    fn with_spp(&self, spp: u32) -> &Visibility {
+        &self
+            .each
+            .iter()
+            .find(|r| r.spp == spp)
+            .expect("every planned reference is traced")
+            .vis
+    }
+}
+
+/// Traces every planned reference on the last frame through one BVH.
+fn trace_references(setup: &Setup, pass: &Pass, plan: &ReferencePlan) -> References {
+    let frame = Frame::new(&setup.scene, &pass.camera, &setup.light, &pass.view);
+    let spp_text: Vec<String> = plan.spps.iter().map(|n| format!("{n} spp")).collect();
+    let pb = progress::step(format!("ray-traced reference ({})", spp_text.join(", ")));
+    let t0 = Instant::now();
+    let reference = Reference::build(&setup.scene);
+    let each = plan
+        .spps
+        .iter()
+        .zip(&plan.samples)
+        .map(|(&spp, samples)| {
+            let t = Instant::now();
+            let vis = reference.visibility(&frame, samples);
+            Traced {
+                spp,
+                vis,
+                ms: t.elapsed().as_secs_f64() * 1e3,
+            }
+        })
+        .collect();
+    let total_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let layers = pass
+        .layers
+        .as_ref()
+        .map(|l| reference.layer_visibility(&frame, l));
+    pb.finish_and_clear();
+    References {
+        each,
+        bvh_ms: reference.build_ms,
+        total_ms,
+        layers,
+    }
+}
+
+/// Writes each reference's shaded image: `reference.png` for the most samples,
+/// `reference-Nspp.png` for the others. Returns the first and their records.
+fn write_references(
+    setup: &Setup,
+    pass: &Pass,
+    folder: &Folder,
+    traced: &References,
+) -> Result<(RgbImage, Vec<ReferenceImage>)> {
+    let layers = traced.layers.as_deref();
+    let first = pass.shade_result(setup, &traced.each[0].vis, layers);
+    output::save_png(&first, &folder.dir.join("reference.png"))?;
+    let mut records = Vec::new();
+    for (i, r) in traced.each.iter().enumerate() {
+        let image = if i == 0 {
+            "reference.png".to_string()
+        } else {
+            let name = format!("reference-{}spp.png", r.spp);
+            let img = pass.shade_result(setup, &r.vis, layers);
+            output::save_png(&img, &folder.dir.join(&name))?;
+            name
+        };
+        records.push(ReferenceImage {
+            samples_per_pixel: r.spp,
+            trace_ms: r.ms,
+            image,
+            shadowed_share: shadowed_share(&pass.view, &r.vis),
+        });
+    }
+    Ok((first, records))
+}
+
+/// What measuring a run needs: the frame, the references and the report folder.
+struct Measured<'a> {
+    setup: &'a Setup,
+    pass: &'a Pass,
+    traced: &'a References,
+    reference_image: &'a RgbImage,
+    dir: &'a Path,
+}
+
+impl Measured<'_> {
+    /// Measures `run` against the reference with `spp` samples, writes its shaded, error
+    /// and worst-region images, and returns its record.
+    fn result(&self, run: &Run, spp: u32) -> Result<RunResult> {
+        let (s, ms) = run.result();
+        let view = &self.pass.view;
+        let ref_vis = self.traced.with_spp(spp);
+        let m = measure(view, &s.visibility, ref_vis);
+        let file = slug(&run.label);
+        let shaded = self.pass.shade(self.setup, s);
+        let error_img = shade::error_image(view, &s.visibility, ref_vis);
+        output::save_png(&shaded, &self.dir.join(format!("{file}.png")))?;
+        output::save_png(&error_img, &self.dir.join(format!("{file}-error.png")))?;
+        let layers = match (&s.layers, &self.traced.layers) {
+            (Some(ours), Some(truth)) => Some((ours.len(), compare_samples(ours, truth))),
+            _ => None,
+        };
+        let worst_region = match report::crops::worst_region(view, &s.visibility, ref_vis) {
+            Some(region) => {
+                let panels = [self.reference_image, &shaded, &error_img];
+                let crop = report::crops::write_crop(self.dir, &file, &region, &panels)?;
+                Some(region.record(crop))
+            }
+            None => None,
+        };
+        let technique = run.technique.name();
+        let sequence = self.setup.frames > 1;
+        Ok(RunResult {
+            technique: technique.to_string(),
+            label: run.label.clone(),
+            params: run.technique.params(),
+            figures: Figures::of(&s.stats, *ms),
+            mismatch_rate: m.mismatch_rate,
+            mean_abs_error: m.mean_abs_error,
+            mean_abs_error_rgb: m.mean_abs_error_rgb,
+            reference_spp: spp,
+            frames_run: run.frames.len(),
+            converged: run.technique.converged(),
+            layer_samples: layers.as_ref().map(|l| l.0),
+            layer_mismatch_rate: layers.as_ref().map(|l| l.1.mismatch_rate),
+            layer_mean_abs_error_rgb: layers.as_ref().map(|l| l.1.mean_abs_error_rgb),
+            image: format!("{file}.png"),
+            error_image: format!("{file}-error.png"),
+            frames: sequence.then(|| run.frames.clone()),
+            animation: sequence.then(|| format!("{file}.gif")),
+            sweep: swept(technique, &run.label),
+            worst_region,
+        })
+    }
+}
+
+/// The swept parameter of a run labelled `technique.key=value`.
+fn swept(technique: &str, label: &str) -> Option<Sweep> {
+    let (key, value) = label
+        .strip_prefix(&format!("{technique}."))?
+        .split_once('=')?;
+    Some(Sweep {
+        key: key.to_string(),
+        value: value.to_string(),
+    })
+}
+
+/// Everything measured, as `metrics.json` records it.
+fn gather(
+    setup: &Setup,
+    pass: &Pass,
+    plan: &ReferencePlan,
+    traced: &References,
+    folder: &Folder,
+    references: Vec<ReferenceImage>,
+    results: Vec<RunResult>,
+) -> Metrics {
+    let view = &pass.view;
+    Metrics {
+        scene: SceneRecord::from(setup),
+        width: view.width,
+        height: view.height,
+        covered_pixels: view.covered_count(),
+        layer_samples: pass.layers.as_ref().map(|l| l.len()),
+        camera_pass_ms: view.time_ms,
+        frames: setup.frames,
+        threads: rayon::current_num_threads(),
+        shadowlab_version: metrics::VERSION.to_string(),
+        camera: CameraRecord::from(&pass.camera),
+        light: LightRecord::from(&setup.light),
+        reference: ReferenceSummary {
+            technique: "raytrace".to_string(),
+            samples_per_pixel: plan.spps[0],
+            pattern: plan.pattern.clone(),
+            time_ms: traced.total_ms,
+            bvh_build_ms: traced.bvh_ms,
+            trace_ms: traced.total_ms - traced.bvh_ms,
+            image: "reference.png".to_string(),
+            shadowed_share: shadowed_share(view, &traced.each[0].vis),
+        },
+        references,
+        results,
+        dump: folder.dump.as_ref().map(|_| "dump".to_string()),
+    }
+}
+
+/// Share of a frame's covered pixels that the reference puts in shadow (term below 0.5).
+fn shadowed_share(view: &ViewSamples, vis: &Visibility) -> f64 {
+    let covered = view.covered_count().max(1);
+    let dark = (0..vis.value.len())
+        .filter(|&k| view.covered(k) && vis.value[k].max_element() < 0.5)
+        .count();
+    dark as f64 / covered as f64
+}
+
+/// The terminal table of `compare`: one line per run, with the reference each verdict used
+/// and the frames of progressive techniques.
+fn print_table(m: &Metrics) {
+    let r = &m.reference;
+    println!(
+        "{} — {} triangles, {}x{}, {} covered pixels; camera pass {:.1} ms; reference {:.1} ms (BVH {:.1} + trace {:.1})",
+        m.scene.scene, m.scene.triangles, m.width, m.height, m.covered_pixels, m.camera_pass_ms, r.time_ms, r.bvh_build_ms, r.trace_ms
+    );
+    println!(
+        "{:<28} {:>10} {:>10} {:>10} {:>8} {:>8}",
+        "technique", "time ms", "mismatch", "mean err", "ref spp", "frames"
+    );
+    for run in &m.results {
+        let frames = match run.converged {
+            None => String::new(),
+            Some(c) => format!("{}{}", run.frames_run, if c { "" } else { " (cap)" }),
+        };
+        println!(
+            "{:<28} {:>10.2} {:>9.4}% {:>10.5} {:>8} {:>8}",
+            run.label,
+            run.figures.time_ms,
+            run.mismatch_rate * 100.0,
+            run.mean_abs_error,
+            run.reference_spp,
+            frames
+        );
+    }
+    println!(
+        "each verdict is against the ray-traced reference at its \"ref spp\" samples per pixel; \
+         \"frames\": the frames a progressive technique had on this still view (until converged, at most {MAX_STILL_FRAMES})"
+    );
+}

@@ -1,0 +1,148 @@
+//! Techniques run over the frames of a view, as `render` and `compare` both run them: the
+//! camera pass of each frame (shared by every technique, with the layers behind
+//! semi-transparent surfaces when asked for), a still view run again until a progressive
+//! technique converges, a sequence frame by frame, and the shaded image of a result.
+
+use crate::config::{RunPlan, Setup};
+use crate::metrics::FrameFigures;
+use anyhow::{Context, Result};
+use shadowlab::camera::Camera;
+use shadowlab::frame::{DumpDir, DumpSink};
+use shadowlab::math::Vec3;
+use shadowlab::shade::{self, RgbImage};
+use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Visibility};
+use shadowlab::view::{ViewLayers, ViewSamples};
+use std::time::Instant;
+
+/// The most frames a still view gives a progressive technique to converge in.
+pub const MAX_STILL_FRAMES: usize = 64;
+
+/// One frame's camera pass: the camera, its samples and, when asked for, the layers.
+pub struct Pass {
+    /// The camera of the frame, its depth range fitted.
+    pub camera: Camera,
+    /// The camera pass.
+    pub view: ViewSamples,
+    /// The surfaces behind semi-transparent ones (`--layers`).
+    pub layers: Option<ViewLayers>,
+}
+
+impl Pass {
+    /// Renders frame `i` of `setup`.
+    pub fn render(setup: &Setup, i: usize) -> Result<Pass> {
+        let camera = setup.camera_at(i);
+        camera
+            .validate()
+            .with_context(|| format!("frame {i} of the camera path of {}", setup.scene.name))?;
+        let view = ViewSamples::try_render(&setup.scene, &camera)?;
+        let layers = if setup.layers {
+            Some(ViewLayers::render(&setup.scene, &camera, &view)?)
+        } else {
+            None
+        };
+        Ok(Pass {
+            camera,
+            view,
+            layers,
+        })
+    }
+
+    /// Frame `index` of the pass, its intermediate images handed to `dump`.
+    pub fn frame<'a>(
+        &'a self,
+        setup: &'a Setup,
+        index: usize,
+        dump: Option<&'a DumpDir>,
+    ) -> Frame<'a> {
+        let mut frame = Frame::new(&setup.scene, &self.camera, &setup.light, &self.view);
+        if let Some(l) = &self.layers {
+            frame = frame.with_layers(l);
+        }
+        frame.index = index;
+        frame.dump = dump.map(|d| d as &dyn DumpSink);
+        frame
+    }
+
+    /// The shaded image of a technique's result (see [`Pass::shade_result`]).
+    pub fn shade(&self, setup: &Setup, s: &Shadows) -> RgbImage {
+        self.shade_result(setup, &s.visibility, s.layers.as_deref())
+    }
+
+    /// The shaded image of a result: the layers composited when the frame has them and the
+    /// technique shaded them, else the nearest surfaces.
+    pub fn shade_result(
+        &self,
+        setup: &Setup,
+        vis: &Visibility,
+        layer_vis: Option<&[Vec3]>,
+    ) -> RgbImage {
+        match (&self.layers, layer_vis) {
+            (Some(l), Some(lv)) => {
+                shade::shade_layers(&setup.scene, &self.view, l, &setup.light, vis, lv)
+            }
+            _ => shade::shade(&setup.scene, &self.view, &setup.light, vis),
+        }
+    }
+}
+
+/// One technique run over every frame of a sequence: the last frame's result and the
+/// per-frame figures.
+pub struct Run {
+    /// The technique.
+    pub technique: Box<dyn ShadowTechnique>,
+    /// Its label.
+    pub label: String,
+    /// The last frame's result and its time in milliseconds.
+    pub last: Option<(Shadows, f64)>,
+    /// Every frame's figures.
+    pub frames: Vec<FrameFigures>,
+}
+
+impl Run {
+    /// A run that has rendered nothing yet.
+    pub fn new(plan: RunPlan) -> Self {
+        Run {
+            technique: plan.technique,
+            label: plan.label,
+            last: None,
+            frames: Vec::new(),
+        }
+    }
+
+    /// Renders one frame of a sequence, or a still frame: then a progressive technique
+    /// (see [`ShadowTechnique::converged`]) is run on it again until it converges or has
+    /// had [`MAX_STILL_FRAMES`] frames.
+    pub fn render(&mut self, frame: &Frame, still: bool) -> Result<()> {
+        self.render_once(frame)?;
+        while still
+            && self.technique.converged() == Some(false)
+            && self.frames.len() < MAX_STILL_FRAMES
+        {
+            self.render_once(frame)?;
+        }
+        Ok(())
+    }
+
+    fn render_once(&mut self, frame: &Frame) -> Result<()> {
+        let t0 = Instant::now();
+        let s = self
+            .technique
+            .render(frame)
+            .with_context(|| format!("technique {}", self.label))?;
+        let ms = t0.elapsed().as_secs_f64() * 1e3;
+        self.frames.push(FrameFigures {
+            frame: frame.index,
+            time_ms: ms,
+            memory_bytes: s.stats.memory_bytes,
+        });
+        self.last = Some((s, ms));
+        Ok(())
+    }
+
+    /// The last frame's result and its time.
+    pub fn result(&self) -> &(Shadows, f64) {
+        self.last
+            .as_ref()
+            .expect("every run renders at least one frame")
+    }
+}
