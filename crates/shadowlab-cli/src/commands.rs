@@ -7,6 +7,7 @@ use anyhow::{bail, Context, Result};
 use serde_json::{json, Value};
 use shadowlab::camera::Camera;
 use shadowlab::compare::{compare as measure, Metrics};
+use shadowlab::frame::{DumpDir, DumpSink};
 use shadowlab::light::Light;
 use shadowlab::reference::Reference;
 use shadowlab::sampling::{pattern, PatternKind};
@@ -338,7 +339,8 @@ pub fn render(a: &RenderArgs) -> Result<()> {
             frame = frame.with_layers(l);
         }
         frame.index = i;
-        frame.dump_dir = a.dump.as_deref();
+        let dump_sink = a.dump.as_deref().map(DumpDir::new);
+        frame.dump = dump_sink.as_ref().map(|d| d as &dyn DumpSink);
         if setup.frames == 1 {
             run_still(&mut run, &frame)?;
         } else {
@@ -579,7 +581,8 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             frame = frame.with_layers(l);
         }
         frame.index = i;
-        frame.dump_dir = dump.as_deref();
+        let dump_sink = dump.as_deref().map(DumpDir::new);
+        frame.dump = dump_sink.as_ref().map(|d| d as &dyn DumpSink);
         for (r, run) in runs.iter_mut().enumerate() {
             bar.set_message(format!("frame {}/{} {}", i + 1, setup.frames, run.label));
             if setup.frames == 1 {

@@ -2,18 +2,18 @@
 //! image plane's sampling points and the leaves of the 2D BSP built over them.
 
 use super::bsp::Bsp;
-use crate::error::Result;
+use crate::picture::{outline_rect, RgbImage};
 
 /// Side of the BSP picture written by `--dump`.
 const DUMP_SIDE: u32 = 1024;
 
 /// Draws one light plane's sample points (grey, brighter where denser) and the rectangles
 /// of the BSP leaves (blue) over the root's rectangle.
-pub(super) fn dump_bsp(path: &std::path::Path, t: &Bsp) -> Result<()> {
+pub(super) fn bsp_picture(t: &Bsp) -> RgbImage {
     let side = DUMP_SIDE;
-    let mut img = crate::shade::RgbImage::new(side, side);
+    let mut img = RgbImage::new(side, side);
     let Some(root) = t.nodes.first() else {
-        return crate::shade::save_png(&img, path);
+        return img;
     };
     let (lo, hi) = (root.lo, root.hi);
     let span = [
@@ -33,14 +33,7 @@ pub(super) fn dump_bsp(path: &std::path::Path, t: &Bsp) -> Result<()> {
     for n in t.nodes.iter().filter(|n| n.is_leaf() && n.len > 0) {
         let (x0, y0) = to_px(n.lo[0], n.lo[1]);
         let (x1, y1) = to_px(n.hi[0], n.hi[1]);
-        for x in x0..=x1 {
-            img.put_pixel(x, y0, image::Rgb([40, 110, 255]));
-            img.put_pixel(x, y1, image::Rgb([40, 110, 255]));
-        }
-        for y in y0..=y1 {
-            img.put_pixel(x0, y, image::Rgb([40, 110, 255]));
-            img.put_pixel(x1, y, image::Rgb([40, 110, 255]));
-        }
+        outline_rect(&mut img, x0, y0, x1, y1, [40, 110, 255]);
     }
-    crate::shade::save_png(&img, path)
+    img
 }
