@@ -78,9 +78,7 @@ mod setup;
 mod shadow_ray;
 mod transform;
 
-use super::{
-    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
-};
+use super::{find_param, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, Visibility};
 use crate::error::Result;
 use crate::math::Vec3;
 use bsp::{Bsp, Node};
@@ -169,18 +167,19 @@ impl ShadowTechnique for AliasFree {
         BTreeMap::from([("leaf-size".to_string(), self.leaf_size.into())])
     }
 
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        vec![ParamSpec::int(
+            "leaf-size",
+            1,
+            MAX_LEAF_SIZE as i64,
+            "a BSP leaf holds at most this many samples (the paper's 64); only the speed changes",
+        )]
+    }
+
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
-        match key {
-            "leaf-size" => {
-                self.leaf_size = check_range(
-                    "afsm",
-                    key,
-                    parse_value("afsm", key, value)?,
-                    1,
-                    MAX_LEAF_SIZE,
-                )?
-            }
-            _ => return Err(unknown_param("afsm", key, &["leaf-size"])),
+        let spec = find_param("afsm", &self.param_specs(), key)?;
+        if key == "leaf-size" {
+            self.leaf_size = spec.u32("afsm", value)?;
         }
         Ok(())
     }
