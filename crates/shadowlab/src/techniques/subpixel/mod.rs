@@ -133,7 +133,7 @@ use super::{
     check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
 };
 use crate::error::{Error, Result};
-use crate::math::Vec3;
+use crate::math::{ndc_to_uv, Vec3};
 use crate::sampling::PatternKind;
 use blockers::Blocker;
 use facets::{non_silhouette_pixels, silhouette_facets, Facet, RayPlane};
@@ -335,13 +335,11 @@ impl<M> FrameState<'_, M> {
     }
 
     /// The depth-map test of pixel `k` in light view `vi`.
-    ///
-    /// The map position comes from [`crate::light::LightView::project`], which multiplies
-    /// by `1/w` where the first pass divides by `w` (`ndc_to_uv`); the two can differ in the
-    /// last bit, and this path has always used the former, so it keeps it.
     fn depth_test(&self, k: usize, vi: usize) -> f32 {
-        let s = self.maps.views[vi].project(self.frame.view.position[k]);
-        self.depth_lookup(k, vi, s.u, s.v, s.depth)
+        let p = self.frame.view.position[k];
+        let lv = &self.maps.views[vi];
+        let (u, v) = ndc_to_uv(lv.clip_from_world * p.extend(1.0));
+        self.depth_lookup(k, vi, u, v, lv.depth(p))
     }
 }
 
