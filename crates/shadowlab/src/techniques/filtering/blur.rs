@@ -46,7 +46,7 @@ pub fn parse_blur(technique: &str, value: &str) -> Result<u32> {
         return Ok(0);
     }
     let side = v.split('x').next().unwrap_or("");
-    let n: u32 = super::super::parse_value(technique, "blur", side)?;
+    let n: u32 = super::super::technique::parse_value(technique, "blur", side)?;
     check_blur(technique, n)
 }
 

@@ -2,7 +2,7 @@
 //! which [`super::depth_range::DepthRange::fitted`] takes its interval; a min-depth pyramid
 //! bounds the nearest texel under a support in a few reads.
 
-use super::super::Frame;
+use crate::frame::Frame;
 use super::footprint::light_footprint;
 use super::lookup::{level_of_detail, Filter};
 use super::settings::FilterSettings;

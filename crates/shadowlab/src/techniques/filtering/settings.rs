@@ -50,8 +50,8 @@ impl FilterSettings {
             "blur" => self.blur = parse_blur(technique, value)?,
             "filter" => self.filter = Filter::parse(technique, value)?,
             "max-aniso" => {
-                let v = super::super::parse_value(technique, key, value)?;
-                self.max_aniso = super::super::check_range(technique, key, v, 1, MAX_ANISOTROPY)?;
+                let v = super::super::technique::parse_value(technique, key, value)?;
+                self.max_aniso = super::super::technique::check_range(technique, key, v, 1, MAX_ANISOTROPY)?;
             }
             _ => return Ok(false),
         }

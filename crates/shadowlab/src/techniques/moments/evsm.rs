@@ -310,7 +310,7 @@ mod tests {
         t.set_param("bits", "16").unwrap();
         // The positive exponent is clamped; the negative one (5) already fits.
         assert_eq!(t.exponents(), (MAX_EXPONENT_16, DEFAULT_EXPONENT_NEG));
-        assert!(warp(1.0, t.exponents()).0.powi(2) < super::super::F16_MAX);
+        assert!(warp(1.0, t.exponents()).0.powi(2) < crate::techniques::moments::F16_MAX);
         t.set_param("bits", "32").unwrap();
         t.set_param("exponent-pos", "100").unwrap();
         assert_eq!(t.exponents().0, MAX_EXPONENT_32);
