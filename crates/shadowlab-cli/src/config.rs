@@ -2,10 +2,11 @@
 //! starts: the scene is loaded, overrides applied, the camera and light resolved.
 
 use anyhow::{bail, Context, Result};
+use shadowlab::auto_light;
 use shadowlab::camera::Camera;
 use shadowlab::light::Light;
 use shadowlab::math::{vec3, Vec3};
-use shadowlab::scene::{self, auto_light, Scene};
+use shadowlab::scene::{self, Scene};
 use std::collections::BTreeMap;
 
 /// The scene-related flags every command shares.
@@ -169,14 +170,14 @@ impl SceneArgs {
             camera_index: self.camera_index,
             allow_outside_scene_dir: self.allow_outside_scene_dir,
         };
-        let scene = scene::load_with(&self.scene, &params, &options)?;
+        let scene = auto_light::load_with(&self.scene, &params, &options)?;
         for w in &scene.warnings {
             eprintln!("warning: {w}");
         }
         let mut camera = scene.camera.unwrap_or_else(|| {
             let mut s = scene.clone();
-            s.auto_frame(false);
-            s.camera.expect("auto_frame sets a camera")
+            s.place_camera(false);
+            s.camera.expect("place_camera sets a camera")
         });
         if let Some(w) = self.width {
             camera.width = w;

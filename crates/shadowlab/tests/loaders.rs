@@ -39,7 +39,7 @@ fn scratch(test: &str) -> PathBuf {
 }
 
 fn load(path: &Path) -> shadowlab::Result<Scene> {
-    scene::load(path.to_str().unwrap(), &Default::default())
+    shadowlab::auto_light::load(path.to_str().unwrap(), &Default::default())
 }
 
 /// Renders `scene` with its own camera (shrunk) and light through `sm` and the reference.
@@ -834,8 +834,11 @@ fn truncated_and_corrupted_files_never_panic() {
 
 /// The example in the TOML module's documentation, taken from its source.
 fn documented_example() -> String {
-    let src =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/src/scene/toml.rs")).unwrap();
+    let src = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/src/scene/toml/mod.rs"
+    ))
+    .unwrap();
     let mut out = String::new();
     let mut inside = false;
     for line in src.lines() {
