@@ -7,11 +7,12 @@
 
 #![forbid(unsafe_code)]
 
+use shadowlab::auto_light;
 use shadowlab::camera::Camera;
 use shadowlab::light::Light;
 use shadowlab::math::{vec3, Vec3};
 use shadowlab::reference::Reference;
-use shadowlab::scene::{self, Material, Scene};
+use shadowlab::scene::{Material, Scene};
 use shadowlab::techniques::{self, Frame};
 use shadowlab::view::{ViewLayers, ViewSamples};
 use std::path::PathBuf;
@@ -35,7 +36,7 @@ fn scratch_path(ext: &str) -> PathBuf {
     dir.join(format!("input.{ext}"))
 }
 
-/// Writes `data` as a file of `format` and loads it through [`scene::load`], exactly as
+/// Writes `data` as a file of `format` and loads it through [`auto_light::load`], exactly as
 /// the command line does. A loaded scene must be valid and finite.
 pub fn load(format: Format, data: &[u8]) {
     let ext = match format {
@@ -49,11 +50,12 @@ pub fn load(format: Format, data: &[u8]) {
     if std::fs::write(&path, data).is_err() {
         return;
     }
-    if let Ok(s) = scene::load(
+    if let Ok(s) = auto_light::load(
         path.to_str().expect("temp paths are UTF-8"),
         &Default::default(),
     ) {
-        s.validate().expect("scene::load returns validated scenes");
+        s.validate()
+            .expect("auto_light::load returns validated scenes");
         assert!(s.bounds.min.is_finite() && s.bounds.max.is_finite());
     }
 }

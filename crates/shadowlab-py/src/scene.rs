@@ -95,8 +95,8 @@ impl PyScene {
             None => {
                 let mut framing = Scene::new("");
                 framing.bounds = s.bounds;
-                framing.auto_frame(false);
-                framing.camera.expect("auto_frame sets a camera")
+                framing.place_camera(false);
+                framing.camera.expect("place_camera sets a camera")
             }
         };
         c.fit_depth_range(&s.bounds);
@@ -122,7 +122,7 @@ impl PyScene {
     fn load(py: Python<'_>, spec: String, params: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
         let params: BTreeMap<String, String> = params_of(params)?.into_iter().collect();
         let s = py
-            .detach(|| shadowlab::scene::load(&spec, &params))
+            .detach(|| shadowlab::auto_light::load(&spec, &params))
             .map_err(py_err)?;
         Ok(PyScene {
             inner: Arc::new(s),
@@ -158,7 +158,7 @@ impl PyScene {
         if ground {
             // As the command line frames a bare mesh: the ground, and a camera and light
             // chosen for the mesh alone.
-            s.auto_frame(true);
+            shadowlab::auto_light::auto_frame(&mut s, true);
         }
         Ok(PyScene {
             inner: Arc::new(s),

@@ -17,6 +17,11 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// pixel, so this caps a frame's buffers near 5 GB.
 pub const MAX_PIXELS: u64 = 1 << 26;
 
+/// The nearest far plane [`Camera::fit_depth_range`] sets (world units). A light's views
+/// use the light module's `LIGHT_MIN_FAR`, ten times smaller: the two fits differ only there,
+/// and each keeps its own so that every image stays as it was.
+pub const CAMERA_MIN_FAR: f32 = 1e-3;
+
 /// A perspective pinhole camera.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Camera {
@@ -181,17 +186,8 @@ impl Camera {
     /// entirely in front), so depth precision is spent where the scene is.
     pub fn fit_depth_range(&mut self, bounds: &crate::math::Aabb) {
         let f = self.forward();
-        let mut zmin = f32::INFINITY;
-        let mut zmax = f32::NEG_INFINITY;
-        for c in bounds.corners() {
-            let z = (c - self.eye).dot(f);
-            zmin = zmin.min(z);
-            zmax = zmax.max(z);
-        }
-        let far = (zmax * 1.01).max(1e-3);
-        let near = if zmin > 0.0 { zmin * 0.99 } else { far * 1e-4 };
-        self.far = far;
-        self.near = near.max(far * 1e-5);
+        let depths = bounds.corners().map(|c| (c - self.eye).dot(f));
+        (self.near, self.far) = crate::math::fit_near_far(depths, CAMERA_MIN_FAR);
     }
 
     /// Moves the camera along its view ray to `factor` times its distance from its target.

@@ -44,6 +44,7 @@
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod auto_light;
 pub mod bvh;
 pub mod camera;
 pub mod compare;

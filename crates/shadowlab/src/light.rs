@@ -141,14 +141,12 @@ impl Light {
     }
 }
 
-/// Up vector for a view looking along `dir` that is not parallel to it.
-pub fn pick_up(dir: Vec3) -> Vec3 {
-    if dir.normalize().y.abs() > 0.99 {
-        Vec3::Z
-    } else {
-        Vec3::Y
-    }
-}
+pub use crate::math::pick_up;
+
+/// The nearest far plane of a perspective light view (world units); the camera module's
+/// `CAMERA_MIN_FAR` is the camera's (ten times larger, kept so that images stay as they
+/// were).
+pub const LIGHT_MIN_FAR: f32 = 1e-4;
 
 /// One square light-space view: what a shadow map is rasterized from.
 ///
@@ -282,17 +280,12 @@ impl LightView {
     /// near and far fitted to `scene`.
     pub fn perspective(position: Vec3, target: Vec3, fov_deg: f32, up: Vec3, scene: &Aabb) -> Self {
         let light_from_world = crate::math::look_at_rh(position, target, up);
-        let mut zmin = f32::INFINITY;
-        let mut zmax = f32::NEG_INFINITY;
-        for p in scene.corners() {
-            let z = -light_from_world.transform_point3(p).z;
-            zmin = zmin.min(z);
-            zmax = zmax.max(z);
-        }
-        let far = (zmax * 1.01).max(1e-4);
         // Geometry closer than `near` would be clipped away; when the light sits inside the
         // scene's box the near plane goes down to a small fraction of far.
-        let near = if zmin > 0.0 { zmin * 0.99 } else { far * 1e-4 }.max(far * 1e-5);
+        let depths = scene
+            .corners()
+            .map(|p| -light_from_world.transform_point3(p).z);
+        let (near, far) = crate::math::fit_near_far(depths, LIGHT_MIN_FAR);
         let fov = fov_deg.to_radians();
         let clip_from_light = crate::math::perspective_rh(fov, 1.0, near, far);
         LightView::new(

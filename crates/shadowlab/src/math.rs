@@ -1,7 +1,7 @@
 //! Vectors, matrices (named destination-from-source: `clip_from_world`), bounds and the
 //! exact geometric predicates shared by the rasterizer, the reference and the techniques.
 
-pub use glam::{vec2, vec3, vec4, DVec3, Mat3, Mat4, UVec2, Vec2, Vec3, Vec3A, Vec4};
+pub use glam::{vec2, vec3, vec4, DMat4, DVec3, DVec4, Mat3, Mat4, UVec2, Vec2, Vec3, Vec3A, Vec4};
 
 /// Texture coordinates `(u, v)` in `[0, 1]²` (v down) of a clip-space position: the
 /// perspective divide, then NDC `[-1, 1]` to `[0, 1]` with y flipped, as every light-space
@@ -279,18 +279,74 @@ pub fn orient2d_i64(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> i64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
+/// The view helpers, written once for `f32` and `f64` ([`pick_up`], [`look_along_rh`];
+/// [`pick_up_f64`], [`look_along_rh_f64`]).
+macro_rules! view_helpers {
+    ($pick_up:ident, $look_along:ident, $float:ty, $v3:ty, $v4:ident, $m4:ty) => {
+        /// An up vector for a view looking along `dir` that is not parallel to it: +Y, or +Z
+        /// when `dir` is within about 8° of vertical.
+        pub fn $pick_up(dir: $v3) -> $v3 {
+            /// The vertical component of the unit `dir` above which +Y is too close to it.
+            const VERTICAL: $float = 0.99;
+            if dir.normalize().y.abs() > VERTICAL {
+                <$v3>::Z
+            } else {
+                <$v3>::Y
+            }
+        }
+
+        /// World-to-view matrix of an eye at `eye` looking along `forward` (any length):
+        /// right-handed view space, looking down −Z with `up` towards +Y.
+        pub fn $look_along(eye: $v3, forward: $v3, up: $v3) -> $m4 {
+            let f = forward.normalize();
+            let s = f.cross(up).normalize();
+            let u = s.cross(f);
+            <$m4>::from_cols(
+                $v4::new(s.x, u.x, -f.x, 0.0),
+                $v4::new(s.y, u.y, -f.y, 0.0),
+                $v4::new(s.z, u.z, -f.z, 0.0),
+                $v4::new(-eye.dot(s), -eye.dot(u), eye.dot(f), 1.0),
+            )
+        }
+    };
+}
+
+view_helpers!(pick_up, look_along_rh, f32, Vec3, Vec4, Mat4);
+view_helpers!(pick_up_f64, look_along_rh_f64, f64, DVec3, DVec4, DMat4);
+
 /// World-to-view matrix of an eye at `eye` looking at `target`: right-handed view space,
 /// looking down −Z with +Y up.
 pub fn look_at_rh(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
-    let f = (target - eye).normalize();
-    let s = f.cross(up).normalize();
-    let u = s.cross(f);
-    Mat4::from_cols(
-        vec4(s.x, u.x, -f.x, 0.0),
-        vec4(s.y, u.y, -f.y, 0.0),
-        vec4(s.z, u.z, -f.z, 0.0),
-        vec4(-eye.dot(s), -eye.dot(u), eye.dot(f), 1.0),
-    )
+    look_along_rh(eye, target - eye, up)
+}
+
+/// Far planes lie this factor beyond the farthest depth of what a view is fitted to.
+pub const FAR_MARGIN: f32 = 1.01;
+/// Near planes lie this factor in front of the nearest depth, when all of it is in front.
+pub const NEAR_MARGIN: f32 = 0.99;
+/// When some of what a view is fitted to is behind its eye plane, near is this share of far.
+pub const NEAR_SHARE_INSIDE: f32 = 1e-4;
+/// Near is never less than this share of far, which bounds the depth range's ratio.
+pub const MIN_NEAR_SHARE: f32 = 1e-5;
+
+/// The `(near, far)` planes of a view fitted to points at the view depths `depths`: far
+/// just beyond the farthest ([`FAR_MARGIN`], at least `min_far`), near just in front of the
+/// nearest ([`NEAR_MARGIN`]) or, when some point is behind the eye plane, a small share of
+/// far ([`NEAR_SHARE_INSIDE`]); never below [`MIN_NEAR_SHARE`] of far.
+pub fn fit_near_far(depths: impl IntoIterator<Item = f32>, min_far: f32) -> (f32, f32) {
+    let mut zmin = f32::INFINITY;
+    let mut zmax = f32::NEG_INFINITY;
+    for z in depths {
+        zmin = zmin.min(z);
+        zmax = zmax.max(z);
+    }
+    let far = (zmax * FAR_MARGIN).max(min_far);
+    let near = if zmin > 0.0 {
+        zmin * NEAR_MARGIN
+    } else {
+        far * NEAR_SHARE_INSIDE
+    };
+    (near.max(far * MIN_NEAR_SHARE), far)
 }
 
 /// View-to-clip perspective projection (right-handed view space, depth in `[0, 1]`, clip

@@ -821,8 +821,11 @@ fn truncated_and_corrupted_files_never_panic() {
 
 /// The example in the TOML module's documentation, taken from its source.
 fn documented_example() -> String {
-    let src =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/src/scene/toml.rs")).unwrap();
+    let src = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/src/scene/toml/mod.rs"
+    ))
+    .unwrap();
     let mut out = String::new();
     let mut inside = false;
     for line in src.lines() {

@@ -8,7 +8,8 @@ use anyhow::{Context, Result};
 use shadowlab::camera::Camera;
 use shadowlab::light::Light;
 use shadowlab::math::Vec3;
-use shadowlab::scene::{self, auto_light, Scene};
+use shadowlab::auto_light;
+use shadowlab::scene::{self, Scene};
 use std::collections::BTreeMap;
 
 /// A loaded scene with its resolved camera (first frame), light and path.
@@ -115,14 +116,14 @@ pub fn resolve(args: &SceneArgs) -> Result<Setup> {
         camera_index: args.camera_index,
         allow_outside_scene_dir: args.allow_outside_scene_dir,
     };
-    let scene = scene::load_with(&args.scene, &params, &options)?;
+    let scene = auto_light::load_with(&args.scene, &params, &options)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
     let mut camera = scene.camera.unwrap_or_else(|| {
         let mut s = scene.clone();
-        s.auto_frame(false);
-        s.camera.expect("auto_frame sets a camera")
+        s.place_camera(false);
+        s.camera.expect("place_camera sets a camera")
     });
     apply_camera_flags(args, &mut camera)?;
     let light = match &args.light {

@@ -14,10 +14,7 @@ pub fn write_obj(scene: &Scene, path: &Path) -> Result<()> {
         what: e.to_string(),
     };
     let mtl_path = path.with_extension("mtl");
-    let mtl_name = mtl_path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let mtl_name = super::file_name(&mtl_path);
     let mut obj = String::with_capacity(scene.len() * 100);
     let _ = writeln!(
         obj,

@@ -1,13 +1,29 @@
 //! Scenes: world-space triangles in structure-of-arrays form, their materials, and the
 //! camera, camera path and light that come with them.
 //!
-//! Loaders (OBJ, PLY, glTF 2.0, the TOML scene format) and the built-in generators of the
-//! papers' test scenes live in the submodules; [`load`] picks one from a scene spec.
+//! This module holds the [`Scene`] and [`Material`] types, the limits every loader checks
+//! ([`MAX_TRIANGLES`], [`check_triangle_count`]) and [`load`], which picks a loader or a
+//! generator from a scene spec, validates the result and frames a bare mesh
+//! ([`Scene::place_camera`]: a ground plane and a camera). The submodules:
+//!
+//! - [`builtin`]: the built-in test scenes, one module per scene family (`bunny`,
+//!   `random_triangles`, `chessboard`, `hairball`, `fence`, `fence_leak`, `cage`, `bumpy`,
+//!   `room`, `street`), their parameters and seeded generator, and [`builtin::shapes`], the
+//!   geometry generators they and the TOML format share.
+//! - [`obj`], [`ply`]: the OBJ (with MTL) and PLY loaders.
+//! - [`gltf`]: glTF 2.0, one module per part of the file it reads (document and limits,
+//!   buffers, accessors, nodes, meshes, materials, cameras, lights).
+//! - [`toml`]: the TOML scene format (the file's structure, its `[[mesh]]` entries, its
+//!   `[camera]` and `[light]` sections).
+//! - [`mesh`]: meshes added and edited in place; [`export`]: a scene written back as OBJ;
+//!   `repeats`: faces that repeat an earlier opaque face, dropped on loading.
+//!
+//! A scene loaded without a light keeps none here: the automatic light is chosen by a
+//! ray-traced estimate, which sits above this layer (the crate's `auto_light` module, whose
+//! `load` is this [`load`] followed by that choice).
 
-pub mod auto_light;
 pub mod builtin;
 pub mod export;
-pub mod fence_leak;
 pub mod gltf;
 pub mod mesh;
 pub mod obj;
@@ -28,7 +44,7 @@ use std::path::Path;
 /// The most triangles a scene may hold; larger scenes are refused before allocation.
 pub const MAX_TRIANGLES: usize = 50_000_000;
 
-/// Triangles [`Scene::auto_frame`] adds as the ground plane under a bare mesh; loaders
+/// Triangles [`Scene::place_camera`] adds as the ground plane under a bare mesh; loaders
 /// count them in before they compare a file's triangles with [`MAX_TRIANGLES`].
 pub const GROUND_TRIANGLES: usize = 2;
 
@@ -61,6 +77,14 @@ pub fn check_triangle_count(path: &Path, triangles: u64) -> Result<()> {
 /// `limit` bytes.
 pub(crate) fn read_input(path: &Path, limit: u64) -> Result<Vec<u8>> {
     files::read_regular_file(path, limit).map_err(|why| Error::io(path, why))
+}
+
+/// The last component of `path` as text (lossily, for a name that is not UTF-8), empty
+/// when there is none: the name a loaded scene gets and its messages use.
+pub(crate) fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
 }
 
 /// Surface and shadow-casting properties of a group of triangles.
@@ -127,8 +151,9 @@ pub struct Scene {
     /// What the loader skipped or approximated, one sentence per kind (e.g. "bike.obj:
     /// skipped 201 faces with fewer than 3 vertices"), in the order met.
     pub warnings: Vec<String>,
-    /// True when `light` was chosen by [`Scene::auto_frame`] (see [`auto_light`]) rather
-    /// than given by the scene, so a caller that moves the camera may choose it again.
+    /// True when `light` was chosen automatically (by the crate's `auto_light` module, which
+    /// sits above the ray tracer it needs) rather than given by the scene, so a caller that
+    /// moves the camera may choose it again.
     pub auto_light: bool,
     /// Bumped whenever the geometry is edited in place (see [`mesh`]), so techniques that
     /// keep state for a scene across frames know to rebuild it.
@@ -295,11 +320,12 @@ impl Scene {
         Ok(())
     }
 
-    /// Gives a bare mesh what it needs to be looked at, whatever its units: a ground
-    /// plane under it (at its lowest point, 4× its footprint), a camera that frames it
-    /// and a directional light chosen so that its shadows fall where the camera sees them
-    /// ([`auto_light::choose`]), for whichever of camera and light it lacks.
-    pub fn auto_frame(&mut self, add_ground: bool) {
+    /// Gives a bare mesh what it needs to be looked at, whatever its units, but its light: a
+    /// ground plane under it (at its lowest point, 4× its footprint) when `add_ground`, and,
+    /// when it has none, a camera that frames it. A missing light is chosen above this
+    /// layer, where the ray tracer its choice needs is (the crate's `auto_light::auto_frame`
+    /// does both).
+    pub fn place_camera(&mut self, add_ground: bool) {
         let b = self.bounds;
         let size = (b.max - b.min).max_element().max(1e-6);
         if add_ground {
@@ -324,11 +350,6 @@ impl Scene {
                 768,
             ));
         }
-        if self.light.is_none() {
-            let camera = self.camera.expect("camera set above");
-            self.light = Some(auto_light::choose(self, &camera));
-            self.auto_light = true;
-        }
     }
 }
 
@@ -345,7 +366,10 @@ pub struct LoadOptions {
 
 /// Loads a scene from a spec: a built-in scene name, or a path to a `.toml` scene, an
 /// `.obj`, `.ply`, `.gltf` or `.glb` mesh. `params` are a built-in scene's parameters
-/// (an error for files). Bare meshes are auto-framed; the result is validated.
+/// (an error for files). Bare meshes get a ground plane and a camera
+/// ([`Scene::place_camera`]); the result is validated. A file without a light is returned
+/// without one: the crate's `auto_light::load` loads through this and adds the automatic
+/// light.
 pub fn load(spec: &str, params: &BTreeMap<String, String>) -> Result<Scene> {
     load_with(spec, params, &LoadOptions::default())
 }
@@ -408,10 +432,7 @@ fn load_spec(
         _ => unreachable!("extension checked above"),
     };
     if s.name.is_empty() {
-        s.name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        s.name = file_name(path);
     }
     if s.is_empty() {
         return Err(Error::format(path, "the file holds no triangles"));
@@ -428,7 +449,8 @@ fn load_spec(
     }
     let bare = s.camera.is_none() && s.light.is_none() && ext.as_deref() != Some("toml");
     let framed = s.camera.is_none();
-    // Before auto-framing: the automatic light traces rays, which needs finite geometry.
+    // Before framing: the automatic light chosen later traces rays, which needs finite
+    // geometry.
     s.validate()?;
     let repeated = s.drop_repeated_faces();
     if repeated > 0 {
@@ -437,7 +459,7 @@ fn load_spec(
             s.name
         ));
     }
-    s.auto_frame(bare);
+    s.place_camera(bare);
     if let (true, Some(mut c)) = (framed, s.camera) {
         c.fit_depth_range(&s.bounds);
         c.validate().map_err(|e| {

@@ -168,10 +168,7 @@ fn prefilter<'a>(path: &Path, bytes: &'a [u8]) -> Result<(Cow<'a, [u8]>, Vec<Str
 impl Skipped {
     /// One sentence per kind of thing skipped.
     fn warnings(&self, path: &Path) -> Vec<String> {
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let name = super::file_name(path);
         let mut out = Vec::new();
         let mut say = |n: usize, one: &str, many: &str, why: &str| {
             if n > 0 {
@@ -222,11 +219,7 @@ fn build(
 ) -> Result<Scene> {
     // A missing or broken .mtl leaves every triangle with the default material.
     let mats = mats.unwrap_or_default();
-    let mut scene = Scene::new(
-        path.file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default(),
-    );
+    let mut scene = Scene::new(super::file_name(path));
     let default = scene.add_material(Material::default());
     let base = scene.materials.len() as u32;
     for m in &mats {

@@ -146,10 +146,7 @@ pub fn load(path: &Path) -> Result<Scene> {
             tris.push([idx[0] as u32, idx[k] as u32, idx[k + 1] as u32]);
         }
     }
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = super::file_name(path);
     let mut scene = Scene::new(name);
     let m = scene.add_material(Material::default());
     scene.push_indexed(&positions, &tris, Mat4::IDENTITY, m);

@@ -32,7 +32,7 @@ pub fn scratch(test: &str) -> PathBuf {
 
 /// The scene at `path`, with no scene parameters.
 pub fn load(path: &Path) -> shadowlab::Result<Scene> {
-    scene::load(path.to_str().unwrap(), &Default::default())
+    shadowlab::auto_light::load(path.to_str().unwrap(), &Default::default())
 }
 
 /// Directional, spot and point lights placed from the scene's bounds: the spot shines from

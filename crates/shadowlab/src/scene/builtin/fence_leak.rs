@@ -1,4 +1,4 @@
-//! The built-in scene `fence-leak`: a picket fence in front of objects standing at
+//! The `fence-leak` scene: a picket fence in front of objects standing at
 //! staggered depths behind it, built to make variance shadow maps leak (the convolution
 //! shadow map paper's Figure 9 set-up).
 //!
@@ -9,11 +9,13 @@
 //! Chebyshev bound of `vsm` lets light through (the ground in a picket's shadow right behind
 //! an object lights up). Units are centimetres, as in `fence`.
 
-use super::builtin::{add_box, add_cylinder, add_plane};
-use super::{Material, Scene};
-use crate::camera::Camera;
+use super::params::Params;
+use super::shapes::{add_box, add_cylinder, add_plane};
+use super::{camera, sky_direction};
+use crate::error::Result;
 use crate::light::Light;
 use crate::math::vec3;
+use crate::scene::{Material, Scene};
 
 /// Number of pickets.
 const PICKETS: usize = 24;
@@ -33,7 +35,7 @@ const OBJECTS: [(f32, f32, f32, f32); 7] = [
 ];
 
 /// Generates the scene (it has no parameters).
-pub fn build(width: u32, height: u32) -> Scene {
+pub(super) fn build(_p: &Params) -> Result<Scene> {
     let mut s = Scene::new("fence-leak");
     let ground = s.add_material(Material::opaque("ground", vec3(0.55, 0.62, 0.45)));
     let wood = s.add_material(Material::opaque("pickets", vec3(0.55, 0.40, 0.28)));
@@ -71,16 +73,13 @@ pub fn build(width: u32, height: u32) -> Scene {
         }
     }
     // A low sun in front of the fence, so the pickets' shadows run back across the objects.
-    let (el, az) = (30f32.to_radians(), 20f32.to_radians());
     s.light = Some(Light::Directional {
-        to_light: vec3(el.cos() * az.sin(), el.sin(), el.cos() * az.cos()),
+        to_light: sky_direction(30.0, 20.0),
     });
-    s.camera = Some(Camera::look_at(
+    s.camera = Some(camera(
         vec3(-60.0, 190.0, -330.0),
         vec3(10.0, 10.0, -60.0),
         45.0,
-        width,
-        height,
     ));
-    s
+    Ok(s)
 }

@@ -1,5 +1,11 @@
 //! The automatic light of a scene that has none: a directional light chosen per scene so
-//! that its shadows fall on receivers the camera sees.
+//! that its shadows fall on receivers the camera sees, and the scene loading that ends
+//! with it ([`load`], [`load_with`], [`auto_frame`]).
+//!
+//! It sits above the reference because it judges its candidates with the reference's ray
+//! tracer on a camera pass; the scene layer below loads and frames a scene
+//! ([`scene::load_with`], [`Scene::place_camera`]) and leaves a missing light to this
+//! module.
 //!
 //! A fixed direction suits some meshes and not others: from nearly overhead, a railing's
 //! shadow falls behind the railing and a radiator's under it, so a comparison there
@@ -17,13 +23,15 @@
 //! the ground plane the auto-framing adds (four times the mesh's footprint). Lights from
 //! beyond the mesh are not tried: they would leave the side the camera sees unlit.
 
-use super::Scene;
 use crate::camera::Camera;
-use crate::frame::Frame;
+use crate::error::Result;
 use crate::light::Light;
 use crate::math::{vec3, Vec3};
 use crate::reference::Reference;
+use crate::scene::{self, LoadOptions, Scene};
+use crate::frame::Frame;
 use crate::view::ViewSamples;
+use std::collections::BTreeMap;
 
 /// Width in pixels of the low-resolution view the candidates are judged in.
 pub const ESTIMATE_WIDTH: u32 = 96;
@@ -129,6 +137,47 @@ pub fn choose(scene: &Scene, camera: &Camera) -> Light {
         .unwrap_or(fallback)
 }
 
+/// Gives `scene` the automatic light ([`choose`], for its camera) when it has no light,
+/// and marks it as chosen ([`Scene::auto_light`]). A scene without a camera must be given
+/// one first ([`Scene::place_camera`]).
+pub fn light_if_missing(scene: &mut Scene) {
+    if scene.light.is_none() {
+        let camera = scene
+            .camera
+            .expect("a scene is given a camera before its automatic light");
+        scene.light = Some(choose(scene, &camera));
+        scene.auto_light = true;
+    }
+}
+
+/// Gives a bare mesh what it needs to be looked at, whatever its units: a ground plane
+/// under it (when `add_ground`) and a camera that frames it ([`Scene::place_camera`]), and
+/// a directional light chosen so that its shadows fall where the camera sees them
+/// ([`choose`]), for whichever of camera and light it lacks.
+pub fn auto_frame(scene: &mut Scene, add_ground: bool) {
+    scene.place_camera(add_ground);
+    light_if_missing(scene);
+}
+
+/// Loads a scene from a spec as [`scene::load`] does, and gives a scene without a light the
+/// automatic one: a built-in scene name, or a path to a `.toml` scene, an `.obj`, `.ply`,
+/// `.gltf` or `.glb` mesh. `params` are a built-in scene's parameters (an error for
+/// files). Bare meshes are auto-framed; the result is validated.
+pub fn load(spec: &str, params: &BTreeMap<String, String>) -> Result<Scene> {
+    load_with(spec, params, &LoadOptions::default())
+}
+
+/// [`load`] with [`LoadOptions`] (see [`scene::load_with`]).
+pub fn load_with(
+    spec: &str,
+    params: &BTreeMap<String, String>,
+    options: &LoadOptions,
+) -> Result<Scene> {
+    let mut s = scene::load_with(spec, params, options)?;
+    light_if_missing(&mut s);
+    Ok(s)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -176,7 +225,7 @@ mod tests {
             s.push([q[0], q[1], q[2]], m);
             s.push([q[0], q[2], q[3]], m);
         }
-        s.auto_frame(true);
+        auto_frame(&mut s, true);
         let cam = s.camera.expect("auto-framed");
         (s, cam)
     }

@@ -1,0 +1,130 @@
+//! The `[camera]` and `[light]` sections of a TOML scene.
+
+use super::spec::{CameraSpec, LightKind, LightSpec};
+use super::{finite3, Msg, MAX_KEY_FRAMES};
+use crate::camera::{Camera, CameraKey, CameraPath};
+use crate::light::Light;
+use crate::scene::Scene;
+
+/// The `[camera]` section: the camera (near and far fitted to `scene` unless given) and
+/// its key-framed path, each key checked as a camera.
+pub(super) fn camera(c: &CameraSpec, scene: &Scene) -> Msg<(Camera, Option<CameraPath>)> {
+    let eye = finite3(c.eye, "eye")?;
+    let target = finite3(c.target, "target")?;
+    let mut camera = Camera::look_at(
+        eye,
+        target,
+        c.fov_y_deg.unwrap_or(45.0),
+        c.width.unwrap_or(1024),
+        c.height.unwrap_or(768),
+    );
+    if let Some(up) = c.up {
+        camera.up = finite3(up, "up")?;
+    }
+    camera.fit_depth_range(&scene.bounds);
+    match (c.near, c.far) {
+        (Some(n), Some(f)) => (camera.near, camera.far) = (n, f),
+        (Some(n), None) => camera.near = n,
+        (None, Some(f)) => camera.far = f,
+        (None, None) => {}
+    }
+    camera.validate().map_err(|e| e.to_string())?;
+    let path = match &c.path {
+        None => None,
+        Some(keys) if keys.is_empty() => return Err("`path` has no key frames".into()),
+        Some(keys) if keys.len() > MAX_KEY_FRAMES => {
+            return Err(format!(
+                "`path` has {} key frames, more than the limit of {MAX_KEY_FRAMES}",
+                keys.len()
+            ))
+        }
+        Some(keys) => {
+            let mut out = Vec::with_capacity(keys.len());
+            for (i, k) in keys.iter().enumerate() {
+                let key = CameraKey {
+                    eye: finite3(k.eye, &format!("path[{i}].eye"))?,
+                    target: finite3(k.target, &format!("path[{i}].target"))?,
+                };
+                let mut check = camera;
+                (check.eye, check.target) = (key.eye, key.target);
+                check.validate().map_err(|e| format!("path[{i}]: {e}"))?;
+                out.push(key);
+            }
+            Some(CameraPath { keys: out })
+        }
+    };
+    Ok((camera, path))
+}
+
+/// The `[light]` section: a directional, spot or point light, refusing the keys that do
+/// not apply to its kind.
+pub(super) fn light(l: &LightSpec) -> Msg<Light> {
+    let kind = match l.kind {
+        LightKind::Directional => "directional",
+        LightKind::Spot => "spot",
+        LightKind::Point => "point",
+    };
+    let reject = |key: &str, given: bool| -> Msg<()> {
+        if given {
+            Err(format!("`{key}` does not apply to a {kind} light"))
+        } else {
+            Ok(())
+        }
+    };
+    let light = match l.kind {
+        LightKind::Directional => {
+            reject("position", l.position.is_some())?;
+            reject("target", l.target.is_some())?;
+            reject("fov_deg", l.fov_deg.is_some())?;
+            let to_light = match (l.direction, l.to_light) {
+                (Some(d), None) => -finite3(d, "direction")?,
+                (None, Some(t)) => finite3(t, "to_light")?,
+                _ => {
+                    return Err(
+                        "a directional light takes exactly one of `direction` and `to_light`"
+                            .into(),
+                    )
+                }
+            };
+            if to_light.length_squared() == 0.0 {
+                return Err("the light direction is the zero vector".into());
+            }
+            Light::Directional {
+                to_light: to_light.normalize(),
+            }
+        }
+        LightKind::Spot => {
+            reject("to_light", l.to_light.is_some())?;
+            let position = finite3(
+                l.position.ok_or("a spot light needs `position`")?,
+                "position",
+            )?;
+            let target = match (l.target, l.direction) {
+                (Some(t), None) => finite3(t, "target")?,
+                (None, Some(d)) => position + finite3(d, "direction")?,
+                _ => {
+                    return Err("a spot light takes exactly one of `target` and `direction`".into())
+                }
+            };
+            Light::Spot {
+                position,
+                target,
+                fov_deg: l.fov_deg.ok_or("a spot light needs `fov_deg`")?,
+            }
+        }
+        LightKind::Point => {
+            reject("direction", l.direction.is_some())?;
+            reject("to_light", l.to_light.is_some())?;
+            reject("target", l.target.is_some())?;
+            reject("fov_deg", l.fov_deg.is_some())?;
+            Light::Point {
+                position: finite3(
+                    l.position.ok_or("a point light needs `position`")?,
+                    "position",
+                )?,
+            }
+        }
+    };
+    light.validate().map_err(|e| e.to_string())?;
+    Ok(light)
+}
