@@ -8,7 +8,7 @@
 
 use shadowlab::light::Light;
 use shadowlab::math::vec3;
-use shadowlab::scene::{self, Scene};
+use shadowlab::scene::Scene;
 use shadowlab::techniques::Visibility;
 use std::path::{Path, PathBuf};
 

@@ -17,7 +17,7 @@ pub mod hamburger;
 pub mod msm;
 
 use super::filtering::Channel;
-use super::parse_value;
+use super::technique::parse_value;
 use crate::error::{Error, Result};
 
 /// Bits per stored moment: a half float / 16-bit normalized format, or 32-bit float.
