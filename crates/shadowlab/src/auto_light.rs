@@ -25,11 +25,11 @@
 
 use crate::camera::Camera;
 use crate::error::Result;
+use crate::frame::Frame;
 use crate::light::Light;
 use crate::math::{vec3, Vec3};
 use crate::reference::Reference;
 use crate::scene::{self, LoadOptions, Scene};
-use crate::frame::Frame;
 use crate::view::ViewSamples;
 use std::collections::BTreeMap;
 

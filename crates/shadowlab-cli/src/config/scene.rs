@@ -5,10 +5,10 @@ use super::parse::{parse_kvs, parse_vec3};
 use crate::args::SceneArgs;
 use crate::failure::{bad_input, InputContext};
 use anyhow::{Context, Result};
+use shadowlab::auto_light;
 use shadowlab::camera::Camera;
 use shadowlab::light::Light;
 use shadowlab::math::Vec3;
-use shadowlab::auto_light;
 use shadowlab::scene::{self, Scene};
 use std::collections::BTreeMap;
 

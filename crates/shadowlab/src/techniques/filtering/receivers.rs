@@ -2,12 +2,12 @@
 //! which [`super::depth_range::DepthRange::fitted`] takes its interval; a min-depth pyramid
 //! bounds the nearest texel under a support in a few reads.
 
-use crate::frame::Frame;
 use super::footprint::light_footprint;
 use super::lookup::{level_of_detail, Filter};
 use super::settings::FilterSettings;
 use super::texture::{fast_ceil, fast_floor};
 use super::{light_view_index, PIXEL_CHUNK};
+use crate::frame::Frame;
 use crate::light::LightView;
 use crate::raster::DepthBuffer;
 use rayon::prelude::*;

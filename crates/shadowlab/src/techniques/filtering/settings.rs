@@ -51,7 +51,8 @@ impl FilterSettings {
             "filter" => self.filter = Filter::parse(technique, value)?,
             "max-aniso" => {
                 let v = super::super::technique::parse_value(technique, key, value)?;
-                self.max_aniso = super::super::technique::check_range(technique, key, v, 1, MAX_ANISOTROPY)?;
+                self.max_aniso =
+                    super::super::technique::check_range(technique, key, v, 1, MAX_ANISOTROPY)?;
             }
             _ => return Ok(false),
         }
