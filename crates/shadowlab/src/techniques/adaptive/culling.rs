@@ -9,6 +9,11 @@ use crate::math::{ndc_to_uv, Vec4};
 use crate::scene::Scene;
 use rayon::prelude::*;
 
+/// Slack around a triangle's root-view rectangle when it is binned: one texel of the
+/// finest level, so that the f32 rounding of the rectangle never leaves a triangle out of
+/// a root cell whose deepest tiles it reaches.
+const BIN_MARGIN: f32 = 1.0 / MAX_EFFECTIVE_RESOLUTION as f32;
+
 impl Face {
     /// Light view `view` of `scene` with a root of `resolution²` texels in `grid²` cells,
     /// its culling lists made and its root still to be made.
@@ -95,7 +100,7 @@ fn triangle_uv_bounds(scene: &Scene, face: &Face, t: usize) -> Option<[f32; 4]> 
 /// Lists, per root cell of `face`, the triangles whose projection overlaps it.
 fn bin_triangles(scene: &Scene, face: &Face) -> Vec<Vec<u32>> {
     let g = face.grid as usize;
-    let margin = 1.0 / MAX_EFFECTIVE_RESOLUTION as f32;
+    let margin = BIN_MARGIN;
     // Cell ranges per triangle, computed in parallel and filled in triangle order.
     let ranges: Vec<Option<[u32; 4]>> = (0..scene.len())
         .into_par_iter()

@@ -17,7 +17,9 @@ use glam::{DMat4, DVec4};
 pub const MAX_EFFECTIVE_RESOLUTION: u64 = 1 << 20;
 /// Marks an empty cell in a node's child table.
 pub(super) const NO_NODE: u32 = u32::MAX;
-/// The largest `u` or `v` kept inside a view.
+/// The largest `u` or `v` kept inside a view: below 1 so that `u · scale` floors to the
+/// view's last texel rather than one past it, and close enough to 1 (a millionth of a
+/// texel at [`MAX_EFFECTIVE_RESOLUTION`]) not to move any look-up to another texel.
 const LAST_UV: f64 = 1.0 - 1e-12;
 
 /// `x.floor() as i64` without a library call in the per-pixel loops (values far outside
