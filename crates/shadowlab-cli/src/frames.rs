@@ -7,11 +7,12 @@ use crate::config::{RunPlan, Setup};
 use crate::metrics::FrameFigures;
 use anyhow::{Context, Result};
 use shadowlab::camera::Camera;
+use shadowlab::frame::{DumpSink, Frame, Visibility};
 use shadowlab::math::Vec3;
-use shadowlab::shade::{self, RgbImage};
-use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Visibility};
+use shadowlab::picture::RgbImage;
+use shadowlab::shade;
+use shadowlab::techniques::{ShadowTechnique, Shadows};
 use shadowlab::view::{ViewLayers, ViewSamples};
-use std::path::Path;
 use std::time::Instant;
 
 /// The most frames a still view gives a progressive technique to converge in.
@@ -47,19 +48,19 @@ impl Pass {
         })
     }
 
-    /// Frame `index` of the pass, its intermediate images dumped into `dump`.
+    /// Frame `index` of the pass, its intermediate images handed to `dump`.
     pub fn frame<'a>(
         &'a self,
         setup: &'a Setup,
         index: usize,
-        dump: Option<&'a Path>,
+        dump: Option<&'a dyn DumpSink>,
     ) -> Frame<'a> {
         let mut frame = Frame::new(&setup.scene, &self.camera, &setup.light, &self.view);
         if let Some(l) = &self.layers {
             frame = frame.with_layers(l);
         }
         frame.index = index;
-        frame.dump_dir = dump;
+        frame.dump = dump;
         frame
     }
 

@@ -1,18 +1,13 @@
 //! Quality metrics of a shadow term against the reference, over covered pixels.
 
+pub use crate::frame::luminance;
+use crate::frame::Visibility;
 use crate::math::Vec3;
-use crate::techniques::Visibility;
 use crate::view::ViewSamples;
 
 /// A visibility difference at or above this counts as a mismatch: the pixel's lit/shadowed
 /// answer flipped.
 pub const MISMATCH_THRESHOLD: f32 = 0.5;
-
-/// Rec. 709 luminance of an RGB transmittance.
-#[inline]
-pub fn luminance(c: Vec3) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
 
 /// How far a shadow term is from the reference.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

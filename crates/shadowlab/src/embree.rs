@@ -14,9 +14,9 @@
 //! [`EmbreeScene::visibility`]'s callers measure.
 
 use crate::error::{Error, Result};
+use crate::frame::{Frame, Visibility};
 use crate::math::Vec3;
 use crate::scene::Scene;
-use crate::techniques::{Frame, Visibility};
 use rayon::prelude::*;
 use std::ffi::{c_char, c_uint, c_void, CStr};
 use std::time::Instant;

@@ -48,6 +48,9 @@ pub enum Error {
         /// What went wrong.
         what: String,
     },
+    /// shadowlab itself is at fault: an invariant broke (exit code 1, not the user's input).
+    #[error("internal error: {0}")]
+    Internal(String),
 }
 
 impl Error {
@@ -74,6 +77,6 @@ impl Error {
 
     /// True when the error is the user's input (exit code 2), false for other failures.
     pub fn is_bad_input(&self) -> bool {
-        !matches!(self, Error::Output { .. })
+        !matches!(self, Error::Output { .. } | Error::Internal(_))
     }
 }

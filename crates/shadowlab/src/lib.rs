@@ -52,12 +52,14 @@ pub mod compare;
 pub mod embree;
 pub mod error;
 pub mod files;
+pub mod frame;
 pub mod gbuffer;
 pub mod light;
 #[allow(unsafe_code)]
 pub mod limits;
 pub mod math;
 pub mod multi_light;
+pub mod picture;
 pub mod points;
 pub mod raster;
 pub mod reference;
@@ -73,9 +75,10 @@ pub use error::{Error, Result};
 pub mod prelude {
     pub use crate::camera::Camera;
     pub use crate::error::{Error, Result};
+    pub use crate::frame::{Frame, Stats, Visibility};
     pub use crate::light::Light;
     pub use crate::math::{vec3, Vec3};
     pub use crate::scene::{Material, Scene};
-    pub use crate::techniques::{Frame, ShadowTechnique, Shadows, Stats, Visibility};
+    pub use crate::techniques::{ShadowTechnique, Shadows};
     pub use crate::view::ViewSamples;
 }

@@ -3,6 +3,14 @@
 
 pub use glam::{vec2, vec3, vec4, DVec3, Mat3, Mat4, UVec2, Vec2, Vec3, Vec3A, Vec4};
 
+/// Texture coordinates `(u, v)` in `[0, 1]²` (v down) of a clip-space position: the
+/// perspective divide, then NDC `[-1, 1]` to `[0, 1]` with y flipped, as every light-space
+/// map of shadowlab is addressed.
+#[inline]
+pub fn ndc_to_uv(clip: Vec4) -> (f32, f32) {
+    (clip.x / clip.w * 0.5 + 0.5, 0.5 - clip.y / clip.w * 0.5)
+}
+
 /// An axis-aligned bounding box. The empty box has `min = +inf`, `max = -inf`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {

@@ -10,10 +10,10 @@
 //! casters multiply their RGB transmittance; the product is taken in triangle-index order
 //! so it is bit-identical whatever order the BVH visits them in.
 
+use crate::frame::{Frame, Visibility};
 use crate::light::Light;
 use crate::math::{intersect_triangle, SurfacePoint, Vec2, Vec3, Vec3A};
 use crate::scene::Scene;
-use crate::techniques::{Frame, Visibility};
 use crate::view::ViewLayers;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::Ray;

@@ -1,12 +1,14 @@
 //! Turning a shadow term into pictures: Lambert shading with an ambient term, error
-//! images, depth-map pictures, and the float EXR of the raw visibility.
+//! images, and the float EXR of the raw visibility.
 
 use crate::error::{Error, Result};
+use crate::frame::{luminance, Visibility};
 use crate::light::Light;
 use crate::math::{vec3, Vec3};
+use crate::picture::to_srgb8;
+pub use crate::picture::{save_png, RgbImage};
 use crate::raster::DepthBuffer;
 use crate::scene::Scene;
-use crate::techniques::Visibility;
 use crate::view::{ViewLayers, ViewSamples};
 use image::{ImageBuffer, Rgb, Rgba};
 use std::path::Path;
@@ -15,21 +17,6 @@ use std::path::Path;
 pub const AMBIENT: f32 = 0.25;
 /// Colour of pixels no surface covers.
 pub const BACKGROUND: Vec3 = vec3(0.18, 0.2, 0.24);
-
-/// An 8-bit sRGB image.
-pub type RgbImage = ImageBuffer<Rgb<u8>, Vec<u8>>;
-
-fn to_srgb8(c: Vec3) -> [u8; 3] {
-    c.to_array().map(|x| {
-        let x = x.clamp(0.0, 1.0);
-        let s = if x <= 0.0031308 {
-            12.92 * x
-        } else {
-            1.055 * x.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0 + 0.5) as u8
-    })
-}
 
 /// The shaded colour of one surface sample: `albedo · (ambient + (1 − ambient) ·
 /// max(0, n·l) · visibility)`.
@@ -116,8 +103,7 @@ pub fn error_image(view: &ViewSamples, vis: &Visibility, reference: &Visibility)
         if !view.covered(k) {
             return Rgb([40, 40, 40]);
         }
-        let d =
-            crate::compare::luminance(vis.value[k]) - crate::compare::luminance(reference.value[k]);
+        let d = luminance(vis.value[k]) - luminance(reference.value[k]);
         let m = (d.abs().sqrt() * 255.0) as u8;
         if d > 0.0 {
             Rgb([m, 0, 0])
@@ -127,30 +113,12 @@ pub fn error_image(view: &ViewSamples, vis: &Visibility, reference: &Visibility)
     })
 }
 
-/// Saves an image as PNG.
-pub fn save_png(img: &RgbImage, path: &Path) -> Result<()> {
-    img.save(path).map_err(|e| Error::Output {
-        path: path.into(),
-        what: e.to_string(),
-    })
-}
-
-/// Writes a depth map as a grey PNG (near = white, empty = black).
+/// Writes a depth map as a grey PNG (see [`crate::picture::depth_image`]).
 pub fn write_depth_png(path: &Path, map: &DepthBuffer) -> Result<()> {
-    let finite = map.depth.iter().copied().filter(|d| d.is_finite());
-    let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), d| {
-        (a.min(d), b.max(d))
-    });
-    let span = (hi - lo).max(1e-20);
-    let img: RgbImage = ImageBuffer::from_fn(map.width, map.height, |x, y| {
-        let d = map.depth[(y * map.width + x) as usize];
-        if !d.is_finite() {
-            return Rgb([0, 0, 0]);
-        }
-        let g = (255.0 - (d - lo) / span * 215.0) as u8;
-        Rgb([g, g, g])
-    });
-    save_png(&img, path)
+    save_png(
+        &crate::picture::depth_image(map.width, map.height, &map.depth),
+        path,
+    )
 }
 
 /// Writes the raw shadow term as a float32 RGBA OpenEXR: R, G, B = transmittance towards

@@ -5,6 +5,7 @@
 
 use shadowlab::camera::Camera;
 use shadowlab::compare::{compare, luminance, MISMATCH_THRESHOLD};
+use shadowlab::frame::Dumped;
 use shadowlab::light::Light;
 use shadowlab::math::{vec2, vec3, Vec3};
 use shadowlab::reference::Reference;
@@ -516,20 +517,33 @@ fn dump_writes_the_post_perspective_map() {
         to_light: vec3(0.3, 1.0, 0.9).normalize(),
     };
     let view = ViewSamples::render(&s, &cam);
-    let mut frame = Frame::new(&s, &cam, &light, &view);
-    let dir = std::env::temp_dir().join(format!("shadowlab-psm-dump-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    frame.dump_dir = Some(&dir);
+    let sink = shadowlab::frame::DumpMemory::default();
+    let frame = Frame::new(&s, &cam, &light, &view).with_dump(&sink);
     let mut t = techniques::create("psm").unwrap();
     t.set_param("resolution", "256").unwrap();
     t.render(&frame).unwrap();
-    let img = image::open(dir.join("psm-post-map0.png")).unwrap();
+    let dumped = sink.take();
+    let find = |name: &str| {
+        dumped
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, d)| d.clone())
+            .unwrap_or_else(|| {
+                panic!(
+                    "no {name} among {:?}",
+                    dumped.iter().map(|d| &d.0).collect::<Vec<_>>()
+                )
+            })
+    };
+    let Dumped::Image(img) = find("psm-post-map0.png") else {
+        panic!("psm-post-map0.png is not a colour image")
+    };
     assert_eq!((img.width(), img.height()), (256, 256));
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("psm-post-space.json")).unwrap())
-            .unwrap();
+    let Dumped::Text(text) = find("psm-post-space.json") else {
+        panic!("psm-post-space.json is not a text")
+    };
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
     assert_eq!(json["light"], "inverted");
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// `psm` against `sm` at 1024² on a paper scene with a directional light perpendicular to

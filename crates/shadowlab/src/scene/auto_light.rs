@@ -19,10 +19,10 @@
 
 use super::Scene;
 use crate::camera::Camera;
+use crate::frame::Frame;
 use crate::light::Light;
 use crate::math::{vec3, Vec3};
 use crate::reference::Reference;
-use crate::techniques::Frame;
 use crate::view::ViewSamples;
 
 /// Width in pixels of the low-resolution view the candidates are judged in.

@@ -1303,7 +1303,7 @@ impl Adaptive {
         }
     }
 
-    fn write_dump(&self, dir: &std::path::Path) -> Result<()> {
+    fn write_dump(&self, frame: &Frame) -> Result<()> {
         let Some(tree) = &self.tree else {
             return Ok(());
         };
@@ -1316,10 +1316,10 @@ impl Adaptive {
                 depth: root.depth.clone(),
                 id: root.id.clone(),
             };
-            crate::shade::write_depth_png(&dir.join(format!("asm-face{f}-root.png")), &map)?;
+            frame.dump_depth(&format!("asm-face{f}-root.png"), &map)?;
             // The tile tree: node outlines over the root map, brighter for deeper levels.
             const SIDE: u32 = 1024;
-            let mut img = crate::shade::RgbImage::from_fn(SIDE, SIDE, |x, y| {
+            let mut img = crate::picture::RgbImage::from_fn(SIDE, SIDE, |x, y| {
                 let tx = (x as u64 * root.res as u64 / SIDE as u64) as u32;
                 let ty = (y as u64 * root.res as u64 / SIDE as u64) as u32;
                 let g = if root.depth[(ty * root.res + tx) as usize].is_finite() {
@@ -1341,16 +1341,9 @@ impl Adaptive {
                     to_px(n.y0 + n.res).min(SIDE - 1),
                 );
                 let c = LEVEL_COLOURS[(n.level as usize - 1) % LEVEL_COLOURS.len()];
-                for x in x0..=x1 {
-                    img.put_pixel(x, y0, image::Rgb(c));
-                    img.put_pixel(x, y1, image::Rgb(c));
-                }
-                for y in y0..=y1 {
-                    img.put_pixel(x0, y, image::Rgb(c));
-                    img.put_pixel(x1, y, image::Rgb(c));
-                }
+                crate::picture::outline_rect(&mut img, x0, y0, x1, y1, c);
             }
-            crate::shade::save_png(&img, &dir.join(format!("asm-face{f}-tree.png")))?;
+            frame.dump_image(&format!("asm-face{f}-tree.png"), || img)?;
         }
         Ok(())
     }
@@ -1609,8 +1602,8 @@ impl ShadowTechnique for Adaptive {
             stats.count("cost_per_texel_ns", cost.a * 1e6);
             stats.count("cost_per_tile_ms", cost.b);
         }
-        if let Some(dir) = frame.dump_dir {
-            self.write_dump(dir)?;
+        if frame.dumping() {
+            self.write_dump(frame)?;
         }
         Ok(Shadows {
             visibility: Visibility {

@@ -204,10 +204,8 @@ impl ShadowTechnique for AliasFree {
         stats.memory_bytes = (samples * per_sample
             + nodes * std::mem::size_of::<Node>()
             + counters.setup_bytes) as u64;
-        if let Some(dir) = frame.dump_dir {
-            for (i, t) in trees.iter().enumerate() {
-                dump_bsp(&dir.join(format!("afsm-bsp{i}.png")), t)?;
-            }
+        for (i, t) in trees.iter().enumerate() {
+            frame.dump_image(&format!("afsm-bsp{i}.png"), || bsp_picture(t))?;
         }
         for t in trees {
             t.recycle(&mut self.buffers);
@@ -224,11 +222,11 @@ const DUMP_SIDE: u32 = 1024;
 
 /// Draws one light plane's sample points (grey, brighter where denser) and the rectangles
 /// of the BSP leaves (blue) over the root's rectangle.
-fn dump_bsp(path: &std::path::Path, t: &Bsp) -> Result<()> {
+fn bsp_picture(t: &Bsp) -> crate::picture::RgbImage {
     let side = DUMP_SIDE;
-    let mut img = crate::shade::RgbImage::new(side, side);
+    let mut img = crate::picture::RgbImage::new(side, side);
     let Some(root) = t.nodes.first() else {
-        return crate::shade::save_png(&img, path);
+        return img;
     };
     let (lo, hi) = (root.lo, root.hi);
     let span = [
@@ -248,16 +246,9 @@ fn dump_bsp(path: &std::path::Path, t: &Bsp) -> Result<()> {
     for n in t.nodes.iter().filter(|n| n.is_leaf() && n.len > 0) {
         let (x0, y0) = to_px(n.lo[0], n.lo[1]);
         let (x1, y1) = to_px(n.hi[0], n.hi[1]);
-        for x in x0..=x1 {
-            img.put_pixel(x, y0, image::Rgb([40, 110, 255]));
-            img.put_pixel(x, y1, image::Rgb([40, 110, 255]));
-        }
-        for y in y0..=y1 {
-            img.put_pixel(x0, y, image::Rgb([40, 110, 255]));
-            img.put_pixel(x1, y, image::Rgb([40, 110, 255]));
-        }
+        crate::picture::outline_rect(&mut img, x0, y0, x1, y1, [40, 110, 255]);
     }
-    crate::shade::save_png(&img, path)
+    img
 }
 
 // ---------------------------------------------------------------------------------------

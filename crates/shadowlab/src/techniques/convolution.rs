@@ -618,10 +618,10 @@ impl Convolution {
             "mip_levels",
             maps.chains.first().map_or(0, |c| c.levels.len()) as f64,
         );
-        if let Some(dir) = frame.dump_dir {
-            for (i, c) in maps.chains.iter().enumerate() {
+        for (i, c) in maps.chains.iter().enumerate() {
+            frame.dump_image(&format!("csm-basis{i}-sin1.png"), || {
                 let t = &c.levels[0];
-                let img = image::RgbImage::from_fn(t.width, t.height, |x, y| {
+                crate::picture::RgbImage::from_fn(t.width, t.height, |x, y| {
                     let b = T::decode_signed(t.texel(x, y)[0].to_f32());
                     // sin(c_1 z): blue where positive, red where negative, as in the paper's Figure 5.
                     let g = (b.abs() * 255.0) as u8;
@@ -630,9 +630,8 @@ impl Convolution {
                     } else {
                         image::Rgb([g, 0, 0])
                     }
-                });
-                crate::shade::save_png(&img, &dir.join(format!("csm-basis{i}-sin1.png")))?;
-            }
+                })
+            })?;
         }
         Ok(value)
     }

@@ -96,7 +96,7 @@ use super::shadow_map::{
 use super::{
     check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
 };
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::light::{cube_face, Light, CUBE_FACES};
 use crate::math::{Aabb, Mat4, Vec3, Vec4};
 use crate::raster::{self, DepthBuffer, SetupTriangle, NO_TRIANGLE};
@@ -381,8 +381,8 @@ impl ShadowTechnique for Perspective {
         stats.count("near", setup.post.near);
         stats.count("far", setup.post.far);
         stats.count("body_vertices", setup.post.body.len() as f64);
-        if let Some(dir) = frame.dump_dir {
-            dump(dir, &setup, res)?;
+        if frame.dumping() {
+            dump(frame, &setup, res)?;
         }
         Ok(Shadows {
             visibility: Visibility {
@@ -1327,7 +1327,7 @@ fn lookup(
 
 /// Writes each post-perspective map (white = the first surface the light reaches) and a
 /// description of the post-perspective space.
-fn dump(dir: &std::path::Path, setup: &Setup, res: u32) -> Result<()> {
+fn dump(frame: &Frame, setup: &Setup, res: u32) -> Result<()> {
     for (i, m) in setup.maps.iter().enumerate() {
         let buf = DepthBuffer {
             width: res,
@@ -1335,7 +1335,7 @@ fn dump(dir: &std::path::Path, setup: &Setup, res: u32) -> Result<()> {
             depth: m.depth.clone(),
             id: vec![NO_TRIANGLE; m.depth.len()],
         };
-        crate::shade::write_depth_png(&dir.join(format!("psm-post-map{i}.png")), &buf)?;
+        frame.dump_depth(&format!("psm-post-map{i}.png"), &buf)?;
     }
     let p = &setup.post;
     let text = serde_json::json!({
@@ -1347,13 +1347,7 @@ fn dump(dir: &std::path::Path, setup: &Setup, res: u32) -> Result<()> {
         "maps": p.maps,
         "body": p.body.iter().map(|v| v.to_array()).collect::<Vec<_>>(),
     });
-    let path = dir.join("psm-post-space.json");
-    std::fs::write(
-        &path,
-        serde_json::to_string_pretty(&text).unwrap_or_default(),
-    )
-    .map_err(|e| Error::Output {
-        path,
-        what: e.to_string(),
+    frame.dump_text("psm-post-space.json", || {
+        serde_json::to_string_pretty(&text).unwrap_or_default()
     })
 }

@@ -2,7 +2,7 @@
 //! tables as the others. See [`crate::reference`] for how rays are traced. The layers
 //! behind semi-transparent surfaces ([`Frame::layers`]) get one shadow ray each.
 
-use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
+use super::{find_param, Frame, ParamSpec, ShadowTechnique, Shadows, Stats};
 use crate::error::Result;
 use crate::reference::Reference;
 use crate::sampling::{pattern, PatternKind};
@@ -30,18 +30,19 @@ impl ShadowTechnique for RayTrace {
         BTreeMap::from([("spp".to_string(), self.spp.into())])
     }
 
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        vec![ParamSpec::int(
+            "spp",
+            1,
+            1024,
+            "primary rays per pixel on a regular grid; 1 traces from the camera pass's samples",
+        )]
+    }
+
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
-        match key {
-            "spp" => {
-                self.spp = check_range(
-                    "raytrace",
-                    key,
-                    parse_value("raytrace", key, value)?,
-                    1,
-                    1024,
-                )?
-            }
-            _ => return Err(unknown_param("raytrace", key, &["spp"])),
+        let spec = find_param("raytrace", &self.param_specs(), key)?;
+        if key == "spp" {
+            self.spp = spec.u32("raytrace", value)?;
         }
         Ok(())
     }

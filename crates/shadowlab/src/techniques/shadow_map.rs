@@ -17,7 +17,8 @@
 //! is too large, and the blocky edges of magnified texels.
 
 use super::{
-    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
+    find_param, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, Visibility, BIAS,
+    RESOLUTION, SLOPE_BIAS,
 };
 use crate::error::{Error, Result};
 use crate::light::{cube_face, light_views, Light, LightView};
@@ -40,6 +41,13 @@ pub const DEFAULT_CONSTANT_BIAS: f32 = 0.5;
 pub const DEFAULT_SLOPE_BIAS: f32 = 1.0;
 /// Default PCF kernel side in texels.
 pub const DEFAULT_PCF_KERNEL: u32 = 3;
+/// The PCF kernel parameter.
+pub const PCF_KERNEL: ParamSpec = ParamSpec::int(
+    "kernel",
+    1,
+    15,
+    "PCF kernel side in texels: wider blurs the shadow edge over more texels",
+);
 /// The slope factor is clamped here so grazing surfaces do not push shadows off entirely.
 const MAX_SLOPE: f32 = 10.0;
 /// Fraction of the fitted directional view added on each side so filters near the edge
@@ -263,24 +271,26 @@ impl ShadowTechnique for ShadowMap {
         m
     }
 
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        let mut table = vec![BIAS, RESOLUTION, SLOPE_BIAS];
+        if self.kernel > 0 {
+            table.insert(1, PCF_KERNEL);
+        }
+        table
+    }
+
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
         let t = self.name;
+        let spec = find_param(t, &self.param_specs(), key)?;
         match key {
             "resolution" => self.resolution = check_resolution(t, parse_value(t, key, value)?)?,
-            "bias" => self.bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?,
-            "slope-bias" => {
-                self.slope_bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?
-            }
-            "kernel" if self.kernel > 0 => {
-                self.kernel = check_range(t, key, parse_value(t, key, value)?, 1, 15)?
-            }
+            "bias" => self.bias = spec.f32(t, value)?,
+            "slope-bias" => self.slope_bias = spec.f32(t, value)?,
+            "kernel" => self.kernel = spec.u32(t, value)?,
             _ => {
-                let known: &[&str] = if self.kernel > 0 {
-                    &["resolution", "bias", "slope-bias", "kernel"]
-                } else {
-                    &["resolution", "bias", "slope-bias"]
-                };
-                return Err(unknown_param(t, key, known));
+                return Err(Error::Internal(format!(
+                    "{t}.{key} is in the table but not set"
+                )))
             }
         }
         Ok(())
@@ -341,9 +351,9 @@ impl ShadowTechnique for ShadowMap {
         });
         stats.memory_bytes = maps.memory_bytes();
         stats.count("map_texels", (res as f64).powi(2) * maps.maps.len() as f64);
-        if let Some(dir) = frame.dump_dir {
+        if frame.dumping() {
             for (i, m) in maps.maps.iter().enumerate() {
-                crate::shade::write_depth_png(&dir.join(format!("{}-map{i}.png", self.name)), m)?;
+                frame.dump_depth(&format!("{}-map{i}.png", self.name), m)?;
             }
         }
         Ok(Shadows {

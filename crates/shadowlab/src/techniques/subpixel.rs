@@ -1691,8 +1691,8 @@ fn run<M: Mask>(
         + (facets.len() * std::mem::size_of::<Facet>()
             + blockers.len() * std::mem::size_of::<Option<Blocker>>()) as u64;
 
-    if let Some(dir) = frame.dump_dir {
-        dump(dir, &maps, &masks, &facets, w, h)?;
+    if frame.dumping() {
+        dump(frame, &maps, &masks, &facets, w, h)?;
     }
     Ok(Visibility {
         width: w,
@@ -1715,36 +1715,32 @@ struct Pairs {
 /// Writes the depth maps, the silhouette mask maps (white: silhouette texel, grey: hidden
 /// silhouette) and the silhouette pixels.
 fn dump(
-    dir: &std::path::Path,
+    frame: &Frame,
     maps: &LightMaps,
     masks: &[MaskMap],
     facets: &[Facet],
     w: u32,
     h: u32,
 ) -> Result<()> {
-    let save = |img: image::GrayImage, name: String| {
-        let path = dir.join(name);
-        img.save(&path).map_err(|e| Error::Output {
-            path,
-            what: e.to_string(),
-        })
-    };
     for (i, (m, mm)) in maps.maps.iter().zip(masks).enumerate() {
-        crate::shade::write_depth_png(&dir.join(format!("subpixel-depth{i}.png")), m)?;
-        let img = image::GrayImage::from_fn(mm.res, mm.res, |x, y| {
-            image::Luma([match mm.mask[(y * mm.res + x) as usize] {
-                1 => 255,
-                2 => 96,
-                _ => 0,
-            }])
-        });
-        save(img, format!("subpixel-silhouette-mask{i}.png"))?;
+        frame.dump_depth(&format!("subpixel-depth{i}.png"), m)?;
+        frame.dump_grey(&format!("subpixel-silhouette-mask{i}.png"), || {
+            image::GrayImage::from_fn(mm.res, mm.res, |x, y| {
+                image::Luma([match mm.mask[(y * mm.res + x) as usize] {
+                    1 => 255,
+                    2 => 96,
+                    _ => 0,
+                }])
+            })
+        })?;
     }
-    let mut img = image::GrayImage::new(w, h);
-    for f in facets {
-        img.put_pixel(f.k % w, f.k / w, image::Luma([255]));
-    }
-    save(img, "subpixel-silhouette-pixels.png".to_string())
+    frame.dump_grey("subpixel-silhouette-pixels.png", || {
+        let mut img = image::GrayImage::new(w, h);
+        for f in facets {
+            img.put_pixel(f.k % w, f.k / w, image::Luma([255]));
+        }
+        img
+    })
 }
 
 #[cfg(test)]

@@ -305,18 +305,12 @@ const CASCADE_COLOURS: [[f32; 3]; MAX_CASCADES] = [
     [0.7, 0.7, 0.7],
 ];
 
-fn dump(
-    dir: &std::path::Path,
-    frame: &Frame,
-    cascades: &[Cascade],
-    which: &[u8],
-    vis: &[Vec3],
-) -> Result<()> {
+fn dump(frame: &Frame, cascades: &[Cascade], which: &[u8], vis: &[Vec3]) -> Result<()> {
     for (i, c) in cascades.iter().enumerate() {
-        crate::shade::write_depth_png(&dir.join(format!("cascaded-map{i}.png")), &c.map)?;
+        frame.dump_depth(&format!("cascaded-map{i}.png"), &c.map)?;
     }
     let (w, h) = (frame.view.width, frame.view.height);
-    let img = image::RgbImage::from_fn(w, h, |x, y| {
+    let img = crate::picture::RgbImage::from_fn(w, h, |x, y| {
         let k = (y * w + x) as usize;
         let base = match which[k] {
             u8::MAX => [0.15; 3],
@@ -325,7 +319,7 @@ fn dump(
         let s = 0.35 + 0.65 * vis[k].x;
         image::Rgb(base.map(|c| (c * s * 255.0) as u8))
     });
-    crate::shade::save_png(&img, &dir.join("cascaded-overlay.png"))
+    frame.dump_image("cascaded-overlay.png", || img)
 }
 
 impl ShadowTechnique for Cascaded {
@@ -425,8 +419,8 @@ impl ShadowTechnique for Cascaded {
             "map_texels",
             cascades.iter().map(|c| c.map.depth.len() as f64).sum(),
         );
-        if let Some(dir) = frame.dump_dir {
-            dump(dir, frame, &cascades, &which, &value)?;
+        if frame.dumping() {
+            dump(frame, &cascades, &which, &value)?;
         }
         Ok(Shadows::new(
             Visibility {

@@ -320,8 +320,8 @@ impl ShadowTechnique for LightSpacePerspective {
         stats.memory_bytes = m.map.depth.len() as u64 * 4;
         stats.count("n", m.warp.n);
         stats.count("map_texels", m.map.depth.len() as f64);
-        if let Some(dir) = frame.dump_dir {
-            crate::shade::write_depth_png(&dir.join("lispsm-map0.png"), &m.map)?;
+        if frame.dumping() {
+            frame.dump_depth("lispsm-map0.png", &m.map)?;
         }
         Ok(Shadows::new(
             Visibility {

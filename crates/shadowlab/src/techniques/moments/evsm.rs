@@ -175,9 +175,9 @@ impl ExponentialVariance {
         stats.count("depth_map_bytes", maps.depth_bytes as f64);
         stats.count("exponent_pos", c.0 as f64);
         stats.count("exponent_neg", c.1 as f64);
-        if let Some(dir) = frame.dump_dir {
+        if frame.dumping() {
             // The positive warp's mean, mapped back to normalized depth.
-            super::dump_level0(dir, "evsm", "mean-depth", &maps.chains, |t| {
+            super::dump_level0(frame, "evsm", "mean-depth", &maps.chains, |t| {
                 (t[0].to_f32().max(1e-30).ln() / c.0.max(1e-6) + 1.0) * 0.5
             })?;
         }

@@ -117,7 +117,7 @@ impl Channel for Unorm16 {
 /// Writes level 0 of each view's filtered map as a grey PNG `{name}-{label}{i}.png`, each
 /// texel's grey level `value(texel)` (clamped to `[0, 1]`, white = 1).
 pub(crate) fn dump_level0<T: Channel>(
-    dir: &std::path::Path,
+    frame: &super::Frame,
     name: &str,
     label: &str,
     chains: &[super::filtering::MipChain<T>],
@@ -125,11 +125,12 @@ pub(crate) fn dump_level0<T: Channel>(
 ) -> Result<()> {
     for (i, c) in chains.iter().enumerate() {
         let t = &c.levels[0];
-        let img = image::RgbImage::from_fn(t.width, t.height, |x, y| {
-            let g = (value(t.texel(x, y)).clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
-            image::Rgb([g, g, g])
-        });
-        crate::shade::save_png(&img, &dir.join(format!("{name}-{label}{i}.png")))?;
+        frame.dump_image(&format!("{name}-{label}{i}.png"), || {
+            crate::picture::RgbImage::from_fn(t.width, t.height, |x, y| {
+                let g = (value(t.texel(x, y)).clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+                image::Rgb([g, g, g])
+            })
+        })?;
     }
     Ok(())
 }

@@ -199,9 +199,9 @@ impl MomentShadowMap {
         });
         stats.memory_bytes = maps.memory_bytes();
         stats.count("depth_map_bytes", maps.depth_bytes as f64);
-        if let Some(dir) = frame.dump_dir {
+        if frame.dumping() {
             // The first moment (the mean depth), recovered from what was stored.
-            super::dump_level0(dir, "msm", "mean-depth", &maps.chains, |t| {
+            super::dump_level0(frame, "msm", "mean-depth", &maps.chains, |t| {
                 let raw = [0, 1, 2, 3].map(|c| t[c].to_f32() as f64);
                 if quantized {
                     dequantize(&inverse, raw.map(|v| v / UNORM16_MAX as f64))[0] as f32

@@ -1,0 +1,283 @@
+//! The interface every shadow algorithm implements, what it returns, and the table of
+//! parameters each one validates its settings against.
+//!
+//! Techniques are `&mut self` so progressive ones keep state between frames. All of them
+//! share [`crate::light::Light::illuminates`]: a pixel whose viewed side faces away from
+//! the light, or lies outside a spot light's cone, is unlit (0) in every technique and in
+//! the reference alike.
+
+use crate::error::{Error, Result};
+use crate::frame::{Frame, Stats, Visibility};
+use crate::math::Vec3;
+use crate::raster::MAX_RASTER_SIDE;
+use std::collections::BTreeMap;
+
+/// The result of one technique on one frame.
+#[derive(Clone, Debug)]
+pub struct Shadows {
+    /// The shadow term.
+    pub visibility: Visibility,
+    /// Timings, memory and counters.
+    pub stats: Stats,
+    /// The shadow term of every layer sample of [`Frame::layers`], in its order; `None`
+    /// when the frame has no layers or the technique shades only the nearest surface.
+    pub layers: Option<Vec<Vec3>>,
+}
+
+impl Shadows {
+    /// The result of a technique that shades the nearest surface of each pixel only.
+    pub fn new(visibility: Visibility, stats: Stats) -> Self {
+        Shadows {
+            visibility,
+            stats,
+            layers: None,
+        }
+    }
+}
+
+/// A shadow algorithm.
+pub trait ShadowTechnique: Send {
+    /// The technique's name as the command line spells it (`sm`, `afsm`, …).
+    fn name(&self) -> &'static str;
+    /// Every parameter in effect, defaults included.
+    fn params(&self) -> BTreeMap<String, serde_json::Value>;
+    /// Every parameter's key, range and meaning, in the order [`ShadowTechnique::params`]
+    /// lists them: the table [`ShadowTechnique::set_param`] validates against.
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        Vec::new()
+    }
+    /// Sets one parameter from its text form; unknown keys and bad values are errors
+    /// that list what is accepted.
+    fn set_param(&mut self, key: &str, value: &str) -> Result<()>;
+    /// Computes the shadow term of a frame.
+    fn render(&mut self, frame: &Frame) -> Result<Shadows>;
+    /// For a progressive technique (one that refines its result over the frames of a still
+    /// view): `Some(true)` once another frame of the same view would change nothing,
+    /// `Some(false)` while it is still refining. `None` for techniques that are done in one
+    /// frame.
+    fn converged(&self) -> Option<bool> {
+        None
+    }
+}
+
+/// The values a technique parameter accepts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ParamRange {
+    /// An integer in `lo..=hi`.
+    Int(i64, i64),
+    /// A real number in `lo..=hi`.
+    Real(f64, f64),
+    /// `true` or `false`.
+    Flag,
+    /// One of these words.
+    Choice(&'static [&'static str]),
+}
+
+impl std::fmt::Display for ParamRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ParamRange::Int(lo, hi) => write!(f, "{lo}..={hi}"),
+            ParamRange::Real(lo, hi) => write!(f, "{lo}..={hi}"),
+            ParamRange::Flag => write!(f, "true|false"),
+            ParamRange::Choice(words) => write!(f, "{}", words.join("|")),
+        }
+    }
+}
+
+/// One parameter of a technique: its key on the command line, the values it accepts and
+/// what it means.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParamSpec {
+    /// The key, as `--param KEY=VALUE` spells it.
+    pub key: &'static str,
+    /// The values it accepts.
+    pub range: ParamRange,
+    /// One line of meaning.
+    pub meaning: &'static str,
+}
+
+impl ParamSpec {
+    /// An integer parameter in `lo..=hi`.
+    pub const fn int(key: &'static str, lo: i64, hi: i64, meaning: &'static str) -> Self {
+        ParamSpec {
+            key,
+            range: ParamRange::Int(lo, hi),
+            meaning,
+        }
+    }
+
+    /// A real parameter in `lo..=hi`.
+    pub const fn real(key: &'static str, lo: f64, hi: f64, meaning: &'static str) -> Self {
+        ParamSpec {
+            key,
+            range: ParamRange::Real(lo, hi),
+            meaning,
+        }
+    }
+
+    /// A `true`/`false` parameter.
+    pub const fn flag(key: &'static str, meaning: &'static str) -> Self {
+        ParamSpec {
+            key,
+            range: ParamRange::Flag,
+            meaning,
+        }
+    }
+
+    /// A parameter taking one of `words`.
+    pub const fn choice(
+        key: &'static str,
+        words: &'static [&'static str],
+        meaning: &'static str,
+    ) -> Self {
+        ParamSpec {
+            key,
+            range: ParamRange::Choice(words),
+            meaning,
+        }
+    }
+
+    fn int_in<T>(&self, technique: &str, value: &str) -> Result<T>
+    where
+        T: std::str::FromStr + Copy + std::fmt::Display + TryFrom<i64> + Into<i128>,
+    {
+        let v: T = parse_value(technique, self.key, value)?;
+        match self.range {
+            ParamRange::Int(lo, hi) => {
+                let x: i128 = v.into();
+                if x >= lo as i128 && x <= hi as i128 {
+                    Ok(v)
+                } else {
+                    Err(out_of_range(technique, self.key, v, lo, hi))
+                }
+            }
+            _ => Err(self.wrong_kind(technique, "an integer")),
+        }
+    }
+
+    /// Parses an integer parameter as `u32`, checking its range.
+    pub fn u32(&self, technique: &str, value: &str) -> Result<u32> {
+        self.int_in(technique, value)
+    }
+
+    /// Parses an integer parameter as `usize`, checking its range.
+    pub fn usize(&self, technique: &str, value: &str) -> Result<usize> {
+        self.int_in::<u64>(technique, value).map(|v| v as usize)
+    }
+
+    /// Parses a real parameter as `f32`, checking its range.
+    pub fn f32(&self, technique: &str, value: &str) -> Result<f32> {
+        let v: f32 = parse_value(technique, self.key, value)?;
+        match self.range {
+            ParamRange::Real(lo, hi) => check_range(technique, self.key, v, lo as f32, hi as f32),
+            _ => Err(self.wrong_kind(technique, "a real number")),
+        }
+    }
+
+    /// Parses a `true`/`false` parameter.
+    pub fn bool(&self, technique: &str, value: &str) -> Result<bool> {
+        match self.range {
+            ParamRange::Flag => parse_value(technique, self.key, value),
+            _ => Err(self.wrong_kind(technique, "a flag")),
+        }
+    }
+
+    /// Parses a parameter taking one of a list of words.
+    pub fn word(&self, technique: &str, value: &str) -> Result<&'static str> {
+        match self.range {
+            ParamRange::Choice(words) => {
+                let v = value.trim();
+                words.iter().copied().find(|w| *w == v).ok_or_else(|| {
+                    Error::param(format!(
+                        "parameter {technique}.{} = {value:?} is not one of {}",
+                        self.key,
+                        words.join(", ")
+                    ))
+                })
+            }
+            _ => Err(self.wrong_kind(technique, "a word")),
+        }
+    }
+
+    fn wrong_kind(&self, technique: &str, what: &str) -> Error {
+        Error::Internal(format!(
+            "parameter {technique}.{} is read as {what} but its table says {}",
+            self.key, self.range
+        ))
+    }
+}
+
+/// The spec of `key` in `table`, or the error naming the technique's parameters.
+pub fn find_param(technique: &str, table: &[ParamSpec], key: &str) -> Result<ParamSpec> {
+    table.iter().find(|s| s.key == key).copied().ok_or_else(|| {
+        let known: Vec<&str> = table.iter().map(|s| s.key).collect();
+        unknown_param(technique, key, &known)
+    })
+}
+
+/// The side of a square light-space map, in texels.
+pub const RESOLUTION: ParamSpec = ParamSpec::int(
+    "resolution",
+    1,
+    MAX_RASTER_SIDE as i64,
+    "side of the shadow map in texels",
+);
+/// The constant depth bias, in texels of the map at the receiver.
+pub const BIAS: ParamSpec = ParamSpec::real(
+    "bias",
+    0.0,
+    1000.0,
+    "constant depth bias in texels: larger detaches shadows (peter-panning), smaller gives acne",
+);
+/// The slope-scaled depth bias, in texels per unit of tan θ.
+pub const SLOPE_BIAS: ParamSpec = ParamSpec::real(
+    "slope-bias",
+    0.0,
+    1000.0,
+    "depth bias in texels per unit of tan θ (θ: angle between normal and light): cures acne on slopes",
+);
+
+/// The error for an unknown parameter key of `technique`, listing the known keys.
+pub fn unknown_param(technique: &str, key: &str, known: &[&str]) -> Error {
+    Error::param(format!(
+        "technique {technique} has no parameter {key:?}: its parameters are {}",
+        known.join(", ")
+    ))
+}
+
+/// Parses `value` for `technique.key`, naming both on failure.
+pub fn parse_value<T: std::str::FromStr>(technique: &str, key: &str, value: &str) -> Result<T> {
+    value.trim().parse::<T>().map_err(|_| {
+        Error::param(format!(
+            "parameter {technique}.{key} = {value:?} is not a valid {}",
+            std::any::type_name::<T>()
+        ))
+    })
+}
+
+fn out_of_range(
+    technique: &str,
+    key: &str,
+    value: impl std::fmt::Display,
+    lo: impl std::fmt::Display,
+    hi: impl std::fmt::Display,
+) -> Error {
+    Error::param(format!(
+        "parameter {technique}.{key} = {value} is outside its range {lo}..={hi}"
+    ))
+}
+
+/// Checks `value` lies in `lo..=hi` for `technique.key`.
+pub fn check_range<T: PartialOrd + std::fmt::Display + Copy>(
+    technique: &str,
+    key: &str,
+    value: T,
+    lo: T,
+    hi: T,
+) -> Result<T> {
+    if value >= lo && value <= hi {
+        Ok(value)
+    } else {
+        Err(out_of_range(technique, key, value, lo, hi))
+    }
+}
