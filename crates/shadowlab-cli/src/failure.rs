@@ -60,8 +60,7 @@ pub fn library_code(e: &shadowlab::Error) -> u8 {
         | Error::Scene { .. }
         | Error::Param(_)
         | Error::Limit(_) => BAD_INPUT,
-        // Writing an output failed after its checks passed, or shadowlab's own invariant
-        // broke.
+        // Writing an output failed after its checks passed; shadowlab itself broke.
         Error::Output { .. } | Error::Internal(_) => INTERNAL,
     }
 }
@@ -153,6 +152,8 @@ mod tests {
             what: "File too large".into(),
         };
         assert_eq!(exit_code(&output.into()), INTERNAL);
+        let internal = Error::Internal("a node lost its parent".into());
+        assert_eq!(exit_code(&internal.into()), INTERNAL);
     }
 
     #[test]

@@ -7,10 +7,11 @@ use crate::config::{RunPlan, Setup};
 use crate::metrics::FrameFigures;
 use anyhow::{Context, Result};
 use shadowlab::camera::Camera;
-use shadowlab::frame::{DumpDir, DumpSink};
+use shadowlab::frame::{DumpSink, Frame, Visibility};
 use shadowlab::math::Vec3;
-use shadowlab::shade::{self, RgbImage};
-use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Visibility};
+use shadowlab::picture::RgbImage;
+use shadowlab::shade;
+use shadowlab::techniques::{ShadowTechnique, Shadows};
 use shadowlab::view::{ViewLayers, ViewSamples};
 use std::time::Instant;
 
@@ -52,14 +53,14 @@ impl Pass {
         &'a self,
         setup: &'a Setup,
         index: usize,
-        dump: Option<&'a DumpDir>,
+        dump: Option<&'a dyn DumpSink>,
     ) -> Frame<'a> {
         let mut frame = Frame::new(&setup.scene, &self.camera, &setup.light, &self.view);
         if let Some(l) = &self.layers {
             frame = frame.with_layers(l);
         }
         frame.index = index;
-        frame.dump = dump.map(|d| d as &dyn DumpSink);
+        frame.dump = dump;
         frame
     }
 

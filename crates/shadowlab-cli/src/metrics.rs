@@ -69,7 +69,7 @@ pub struct Figures {
 
 impl Figures {
     /// The figures of a result that took `time_ms`.
-    pub fn of(stats: &shadowlab::techniques::Stats, time_ms: f64) -> Self {
+    pub fn of(stats: &shadowlab::frame::Stats, time_ms: f64) -> Self {
         Figures {
             time_ms,
             stages_ms: StageTimes(stats.stages_ms.clone()),

@@ -550,3 +550,28 @@ fn techniques_lists_every_technique_with_its_parameters() {
     let unknown = bin().args(["techniques", "no-such-technique"]).ran();
     refused(&unknown, &["no-such-technique", "known techniques are"]);
 }
+
+#[test]
+fn a_failed_image_comparison_leaves_its_error_image() {
+    let d = tmp("error-image");
+    let (a, b) = (d.join("a.png"), d.join("b.png"));
+    image::RgbImage::from_pixel(8, 4, image::Rgb([10, 20, 30]))
+        .save(&a)
+        .unwrap();
+    let mut other = image::RgbImage::from_pixel(8, 4, image::Rgb([10, 20, 30]));
+    other.put_pixel(3, 2, image::Rgb([200, 20, 30]));
+    other.save(&b).unwrap();
+    support::assert_same_files("cli-error-image-same", &a, &a);
+    let failed = std::panic::catch_unwind(|| {
+        support::assert_same_files("cli-error-image-check", &a, &b);
+    });
+    let msg = failed.expect_err("the images differ");
+    let msg = msg.downcast_ref::<String>().cloned().unwrap_or_default();
+    let written = support::failures_dir().join("cli-error-image-check.png");
+    assert!(msg.contains(&written.display().to_string()), "{msg}");
+    let img = image::open(&written).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (8, 4));
+    let [r, _, blue] = img.get_pixel(3, 2).0;
+    assert!(r == 0 && blue > 200, "b is lighter there: blue");
+    assert_eq!(img.get_pixel(0, 0).0, [0, 0, 0]);
+}

@@ -308,3 +308,26 @@ fn results_are_identical_for_one_two_and_four_threads() {
         }
     }
 }
+
+#[test]
+fn a_failed_shadow_term_comparison_leaves_its_error_image() {
+    use shadowlab::frame::Visibility;
+    let a = Visibility::lit(6, 4);
+    let mut b = a.clone();
+    b.value[9] = Vec3::ZERO;
+    assert_same_visibility("foundation-error-image-same", &a, &a.clone());
+    let failed = std::panic::catch_unwind(|| {
+        assert_same_visibility("foundation-error-image-check", &a, &b);
+    });
+    let msg = failed.expect_err("the shadow terms differ");
+    let msg = msg.downcast_ref::<String>().cloned().unwrap_or_default();
+    let written = support::failures_dir().join("foundation-error-image-check.png");
+    assert!(msg.contains(&written.display().to_string()), "{msg}");
+    let img = image::open(&written).unwrap().to_rgb8();
+    assert_eq!(
+        img.get_pixel(3, 1).0,
+        [255, 0, 0],
+        "a is lighter there: red"
+    );
+    assert_eq!(img.get_pixel(0, 0).0, [0, 0, 0]);
+}

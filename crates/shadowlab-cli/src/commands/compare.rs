@@ -18,11 +18,11 @@ use crate::output::{self, slug, Animation};
 use crate::{progress, report};
 use anyhow::Result;
 use shadowlab::compare::{compare as measure, compare_samples};
-use shadowlab::frame::DumpDir;
+use shadowlab::frame::{DumpDir, DumpSink, Frame, Visibility};
 use shadowlab::math::Vec3;
+use shadowlab::picture::RgbImage;
 use shadowlab::reference::Reference;
-use shadowlab::shade::{self, RgbImage};
-use shadowlab::techniques::{Frame, Visibility};
+use shadowlab::shade;
 use shadowlab::view::ViewSamples;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -81,7 +81,7 @@ pub fn run(cfg: CompareConfig) -> Result<()> {
 /// of each run of a sequence.
 struct Folder {
     dir: PathBuf,
-    dump: Option<PathBuf>,
+    dump: Option<DumpDir>,
     animations: Vec<Animation>,
 }
 
@@ -90,9 +90,9 @@ impl Folder {
     /// sequence `DIR/frames/` and an animated `DIR/<run>.gif` per run.
     fn create(dir: &Path, dump: bool, setup: &Setup, runs: &[Run]) -> Result<Self> {
         output::create_report_dir(dir)?;
-        let dump = dump.then(|| dir.join("dump"));
+        let dump = dump.then(|| DumpDir::new(&dir.join("dump")));
         if let Some(d) = &dump {
-            output::create_dir(d)?;
+            output::create_dir(&d.0)?;
         }
         let mut animations = Vec::new();
         if setup.frames > 1 {
@@ -117,11 +117,11 @@ fn render_frames(setup: &Setup, runs: &mut [Run], folder: &mut Folder) -> Result
     let frames = setup.frames;
     let bar = progress::bar((frames * runs.len()) as u64, "techniques");
     let mut last = None;
-    let dump = folder.dump.as_deref().map(DumpDir::new);
     for i in 0..frames {
         bar.set_message(format!("frame {}/{frames} camera pass", i + 1));
         let pass = Pass::render(setup, i)?;
-        let frame = pass.frame(setup, i, dump.as_ref());
+        let sink = folder.dump.as_ref().map(|d| d as &dyn DumpSink);
+        let frame = pass.frame(setup, i, sink);
         for (r, run) in runs.iter_mut().enumerate() {
             bar.set_message(format!("frame {}/{frames} {}", i + 1, run.label));
             run.render(&frame, frames == 1)?;

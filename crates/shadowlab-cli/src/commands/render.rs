@@ -11,7 +11,7 @@ use crate::metrics::{self, CameraRecord, Figures, LightRecord, RenderStats, Scen
 use crate::output::{self, Animation};
 use crate::progress;
 use anyhow::{Context, Result};
-use shadowlab::frame::DumpDir;
+use shadowlab::frame::{DumpDir, DumpSink};
 use shadowlab::shade;
 
 /// Runs `render`.
@@ -41,22 +41,23 @@ pub fn run(cfg: RenderConfig) -> Result<()> {
 
 /// Renders every frame; a sequence writes `OUT-NNNN.png` per frame and the animated
 /// `OUT.gif` as it goes. Returns the last frame's camera pass.
-fn render_frames(setup: &Setup, cfg: &RenderOutputs, run: &mut Run) -> Result<Pass> {
+fn render_frames(setup: &Setup, out: &RenderOutputs, run: &mut Run) -> Result<Pass> {
     let sequence = setup.frames > 1;
+    let dump = out.dump.as_deref().map(DumpDir::new);
     let bar = progress::bar(setup.frames as u64, format!("rendering {}", run.label));
     let mut animation = if sequence {
-        Some(Animation::create(&cfg.output.with_extension("gif"))?)
+        Some(Animation::create(&out.output.with_extension("gif"))?)
     } else {
         None
     };
     let mut last = None;
-    let dump = cfg.dump.as_deref().map(DumpDir::new);
     for i in 0..setup.frames {
         let pass = Pass::render(setup, i)?;
-        run.render(&pass.frame(setup, i, dump.as_ref()), !sequence)?;
+        let sink = dump.as_ref().map(|d| d as &dyn DumpSink);
+        run.render(&pass.frame(setup, i, sink), !sequence)?;
         if let Some(anim) = animation.as_mut() {
             let img = pass.shade(setup, &run.result().0);
-            output::save_png(&img, &output::frame_file(&cfg.output, i))?;
+            output::save_png(&img, &output::frame_file(&out.output, i))?;
             anim.push(&img)?;
         }
         bar.inc(1);
@@ -70,17 +71,17 @@ fn render_frames(setup: &Setup, cfg: &RenderOutputs, run: &mut Run) -> Result<Pa
 }
 
 /// Writes the last frame's image, shadow term, scene and stats; returns its time.
-fn write_outputs(setup: &Setup, cfg: &RenderOutputs, run: &Run, pass: &Pass) -> Result<f64> {
+fn write_outputs(setup: &Setup, out: &RenderOutputs, run: &Run, pass: &Pass) -> Result<f64> {
     let (shadows, time_ms) = run.result();
     let img = pass.shade(setup, shadows);
-    output::save_png(&img, &cfg.output)?;
-    if let Some(p) = &cfg.visibility {
+    output::save_png(&img, &out.output)?;
+    if let Some(p) = &out.visibility {
         shade::write_visibility_exr(p, &pass.view, &shadows.visibility)?;
     }
-    if let Some(p) = &cfg.export_scene {
+    if let Some(p) = &out.export_scene {
         shadowlab::scene::export::write_obj(&setup.scene, p)?;
     }
-    if let Some(p) = &cfg.stats {
+    if let Some(p) = &out.stats {
         output::write_json(p, &stats(setup, run, pass))?;
     }
     Ok(*time_ms)

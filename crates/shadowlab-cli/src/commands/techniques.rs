@@ -30,16 +30,20 @@ struct Parameter {
 }
 
 /// What the technique says of its parameters: every key `params()` lists with its
-/// default, and the range and meaning its parameter table gives ("-" where it gives
-/// none).
+/// default, and the range and meaning of its parameter table (`param_specs()`, the table
+/// `set_param` validates against; "-" for a key the table lacks).
 fn parameters(t: &dyn ShadowTechnique) -> Vec<Parameter> {
+    let specs = t.param_specs();
     t.params()
         .into_iter()
-        .map(|(key, default)| Parameter {
-            key,
-            default: value_text(&default),
-            range: "-".to_string(),
-            meaning: "-".to_string(),
+        .map(|(key, default)| {
+            let spec = specs.iter().find(|s| s.key == key);
+            Parameter {
+                default: value_text(&default),
+                range: spec.map_or("-".to_string(), |s| s.range.to_string()),
+                meaning: spec.map_or("-".to_string(), |s| s.meaning.to_string()),
+                key,
+            }
         })
         .collect()
 }

@@ -6,9 +6,8 @@
 use crate::metrics::WorstRegion;
 use crate::output::{create_dir, save_png};
 use anyhow::Result;
-use image::RgbImage;
-use shadowlab::compare::luminance;
-use shadowlab::techniques::Visibility;
+use shadowlab::frame::{luminance, Visibility};
+use shadowlab::picture::RgbImage;
 use shadowlab::view::ViewSamples;
 use std::path::Path;
 

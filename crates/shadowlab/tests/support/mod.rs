@@ -6,10 +6,10 @@
 // Each test file uses the part it needs.
 #![allow(dead_code)]
 
+use shadowlab::frame::Visibility;
 use shadowlab::light::Light;
 use shadowlab::math::vec3;
 use shadowlab::scene::Scene;
-use shadowlab::techniques::Visibility;
 use std::path::{Path, PathBuf};
 
 /// A file under `crates/shadowlab/assets`.
