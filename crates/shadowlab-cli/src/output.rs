@@ -5,8 +5,8 @@
 //! without `--force`, none goes through a dangling symbolic link, and each one's folder
 //! exists. A report folder is recognised by a marker file only shadowlab writes. Then:
 //! file names made from run labels ([`slug`]), pretty JSON ([`write_json`]), folders
-//! ([`create_dir`]), PNG images ([`save_png`]) and animated GIFs written frame by frame
-//! ([`Animation`]). A write that fails once the checks have passed is an internal failure
+//! ([`create_dir`]) and animated GIFs written frame by frame ([`Animation`]); PNG images
+//! go through [`shadowlab::picture::save_png`]. A write that fails once the checks have passed is an internal failure
 //! (exit status 1), not input.
 
 use crate::failure::bad_input as bad;
@@ -207,18 +207,6 @@ pub fn write_json(path: &Path, v: &impl Serialize) -> Result<()> {
     let text = serde_json::to_string_pretty(v)
         .with_context(|| format!("cannot write {}", path.display()))?;
     std::fs::write(path, text + "\n").with_context(|| format!("cannot write {}", path.display()))
-}
-
-/// Writes an image as PNG. It is encoded in memory and then written in one go, so that a
-/// write that fails (a full disk, a file size limit) is an error here rather than lost in
-/// the flush of a dropped buffer, as it is when `image` saves to a file; the bytes are the
-/// same as its.
-pub fn save_png(img: &RgbImage, path: &Path) -> Result<()> {
-    let mut png = std::io::Cursor::new(Vec::new());
-    img.write_to(&mut png, image::ImageFormat::Png)
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    std::fs::write(path, png.into_inner())
-        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Display time of one animation frame in milliseconds (10 frames per second).

@@ -7,7 +7,7 @@
 
 use crate::error::{Error, Result};
 use crate::math::Vec3;
-use image::{ImageBuffer, Rgb};
+use image::{ImageBuffer, ImageFormat, Pixel, PixelWithColorType, Rgb};
 use std::path::Path;
 
 /// An 8-bit sRGB image.
@@ -28,28 +28,48 @@ pub fn to_srgb8(c: Vec3) -> [u8; 3] {
     })
 }
 
-/// Saves an image as PNG.
-pub fn save_png(img: &RgbImage, path: &Path) -> Result<()> {
-    img.save(path).map_err(|e| Error::Output {
+/// Writes `bytes` to `path`, naming the file when the write fails.
+fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
+    std::fs::write(path, bytes).map_err(|e| Error::Output {
         path: path.into(),
         what: e.to_string(),
     })
 }
 
-/// Saves a grey image as PNG.
+/// Encodes an image in memory, then writes it in one go: a write that fails (a full disk,
+/// a file-size limit) is an error here, where `image`'s own `save` can lose it in the
+/// flush of a dropped buffer. The bytes are those `save` writes.
+pub fn save_image<P>(
+    img: &ImageBuffer<P, Vec<P::Subpixel>>,
+    format: ImageFormat,
+    path: &Path,
+) -> Result<()>
+where
+    P: Pixel + PixelWithColorType,
+    [P::Subpixel]: image::EncodableLayout,
+{
+    let mut encoded = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut encoded, format)
+        .map_err(|e| Error::Output {
+            path: path.into(),
+            what: e.to_string(),
+        })?;
+    write_file(path, encoded.get_ref())
+}
+
+/// Saves an image as PNG (see [`save_image`]).
+pub fn save_png(img: &RgbImage, path: &Path) -> Result<()> {
+    save_image(img, ImageFormat::Png, path)
+}
+
+/// Saves a grey image as PNG (see [`save_image`]).
 pub fn save_grey_png(img: &GreyImage, path: &Path) -> Result<()> {
-    img.save(path).map_err(|e| Error::Output {
-        path: path.into(),
-        what: e.to_string(),
-    })
+    save_image(img, ImageFormat::Png, path)
 }
 
 /// Writes a text file (a dump's description of what its images show).
 pub fn save_text(text: &str, path: &Path) -> Result<()> {
-    std::fs::write(path, text).map_err(|e| Error::Output {
-        path: path.into(),
-        what: e.to_string(),
-    })
+    write_file(path, text.as_bytes())
 }
 
 /// A depth map as a grey picture, `width × height` row-major depths: the nearest depth

@@ -5,9 +5,8 @@ use crate::error::{Error, Result};
 use crate::frame::{luminance, Visibility};
 use crate::light::Light;
 use crate::math::{vec3, Vec3};
-use crate::picture::to_srgb8;
+use crate::picture::{save_image, to_srgb8};
 pub use crate::picture::{save_png, RgbImage};
-use crate::raster::DepthBuffer;
 use crate::scene::Scene;
 use crate::view::{ViewLayers, ViewSamples};
 use image::{ImageBuffer, Rgb, Rgba};
@@ -113,14 +112,6 @@ pub fn error_image(view: &ViewSamples, vis: &Visibility, reference: &Visibility)
     })
 }
 
-/// Writes a depth map as a grey PNG (see [`crate::picture::depth_image`]).
-pub fn write_depth_png(path: &Path, map: &DepthBuffer) -> Result<()> {
-    save_png(
-        &crate::picture::depth_image(map.width, map.height, &map.depth),
-        path,
-    )
-}
-
 /// Writes the raw shadow term as a float32 RGBA OpenEXR: R, G, B = transmittance towards
 /// the light (1 = lit), A = coverage (1 where a surface covers the pixel centre).
 pub fn write_visibility_exr(path: &Path, view: &ViewSamples, vis: &Visibility) -> Result<()> {
@@ -130,10 +121,7 @@ pub fn write_visibility_exr(path: &Path, view: &ViewSamples, vis: &Visibility) -
         let v = vis.value[k];
         Rgba([v.x, v.y, v.z, if view.covered(k) { 1.0 } else { 0.0 }])
     });
-    img.save(path).map_err(|e| Error::Output {
-        path: path.into(),
-        what: e.to_string(),
-    })
+    save_image(&img, image::ImageFormat::OpenExr, path)
 }
 
 /// Reads a visibility EXR written by [`write_visibility_exr`]: the shadow term and the

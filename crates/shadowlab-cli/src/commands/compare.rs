@@ -20,7 +20,7 @@ use anyhow::Result;
 use shadowlab::compare::{compare as measure, compare_samples};
 use shadowlab::frame::{DumpDir, DumpSink, Frame, Visibility};
 use shadowlab::math::Vec3;
-use shadowlab::picture::RgbImage;
+use shadowlab::picture::{self, RgbImage};
 use shadowlab::reference::Reference;
 use shadowlab::shade;
 use shadowlab::view::ViewSamples;
@@ -128,7 +128,7 @@ fn render_frames(setup: &Setup, runs: &mut [Run], folder: &mut Folder) -> Result
             if let Some(anim) = folder.animations.get_mut(r) {
                 let img = pass.shade(setup, &run.result().0);
                 let file = format!("frames/{}-{i:04}.png", slug(&run.label));
-                output::save_png(&img, &folder.dir.join(file))?;
+                picture::save_png(&img, &folder.dir.join(file))?;
                 anim.push(&img)?;
             }
             bar.inc(1);
@@ -215,7 +215,7 @@ fn write_references(
 ) -> Result<(RgbImage, Vec<ReferenceImage>)> {
     let layers = traced.layers.as_deref();
     let first = pass.shade_result(setup, &traced.each[0].vis, layers);
-    output::save_png(&first, &folder.dir.join("reference.png"))?;
+    picture::save_png(&first, &folder.dir.join("reference.png"))?;
     let mut records = Vec::new();
     for (i, r) in traced.each.iter().enumerate() {
         let image = if i == 0 {
@@ -223,7 +223,7 @@ fn write_references(
         } else {
             let name = format!("reference-{}spp.png", r.spp);
             let img = pass.shade_result(setup, &r.vis, layers);
-            output::save_png(&img, &folder.dir.join(&name))?;
+            picture::save_png(&img, &folder.dir.join(&name))?;
             name
         };
         records.push(ReferenceImage {
@@ -256,8 +256,8 @@ impl Measured<'_> {
         let file = slug(&run.label);
         let shaded = self.pass.shade(self.setup, s);
         let error_img = shade::error_image(view, &s.visibility, ref_vis);
-        output::save_png(&shaded, &self.dir.join(format!("{file}.png")))?;
-        output::save_png(&error_img, &self.dir.join(format!("{file}-error.png")))?;
+        picture::save_png(&shaded, &self.dir.join(format!("{file}.png")))?;
+        picture::save_png(&error_img, &self.dir.join(format!("{file}-error.png")))?;
         let layers = match (&s.layers, &self.traced.layers) {
             (Some(ours), Some(truth)) => Some((ours.len(), compare_samples(ours, truth))),
             _ => None,

@@ -12,7 +12,7 @@ use crate::output::{self, Animation};
 use crate::progress;
 use anyhow::{Context, Result};
 use shadowlab::frame::{DumpDir, DumpSink};
-use shadowlab::shade;
+use shadowlab::{picture, shade};
 
 /// Runs `render`.
 pub fn run(cfg: RenderConfig) -> Result<()> {
@@ -57,7 +57,7 @@ fn render_frames(setup: &Setup, out: &RenderOutputs, run: &mut Run) -> Result<Pa
         run.render(&pass.frame(setup, i, sink), !sequence)?;
         if let Some(anim) = animation.as_mut() {
             let img = pass.shade(setup, &run.result().0);
-            output::save_png(&img, &output::frame_file(&out.output, i))?;
+            picture::save_png(&img, &output::frame_file(&out.output, i))?;
             anim.push(&img)?;
         }
         bar.inc(1);
@@ -74,7 +74,7 @@ fn render_frames(setup: &Setup, out: &RenderOutputs, run: &mut Run) -> Result<Pa
 fn write_outputs(setup: &Setup, out: &RenderOutputs, run: &Run, pass: &Pass) -> Result<f64> {
     let (shadows, time_ms) = run.result();
     let img = pass.shade(setup, shadows);
-    output::save_png(&img, &out.output)?;
+    picture::save_png(&img, &out.output)?;
     if let Some(p) = &out.visibility {
         shade::write_visibility_exr(p, &pass.view, &shadows.visibility)?;
     }

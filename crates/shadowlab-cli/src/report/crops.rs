@@ -4,9 +4,10 @@
 //! and the error image.
 
 use crate::metrics::WorstRegion;
-use crate::output::{create_dir, save_png};
+use crate::output::create_dir;
 use anyhow::Result;
 use shadowlab::frame::{luminance, Visibility};
+use shadowlab::picture::save_png;
 use shadowlab::picture::RgbImage;
 use shadowlab::view::ViewSamples;
 use std::path::Path;
