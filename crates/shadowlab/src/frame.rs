@@ -151,20 +151,18 @@ impl Visibility {
             value: vec![Vec3::ONE; width as usize * height as usize],
         }
     }
+
+    /// The luminance of pixel `k`'s transmittance (see [`luminance`]).
+    #[inline]
+    pub fn luminance(&self, k: usize) -> f32 {
+        luminance(self.value[k])
+    }
 }
 
 /// Rec. 709 luminance of an RGB transmittance.
 #[inline]
 pub fn luminance(c: Vec3) -> f32 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
-
-impl Visibility {
-    /// The luminance of pixel `k`'s transmittance (see [`luminance`]).
-    #[inline]
-    pub fn luminance(&self, k: usize) -> f32 {
-        luminance(self.value[k])
-    }
 }
 
 /// Where a technique's intermediate images go.

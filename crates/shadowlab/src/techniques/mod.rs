@@ -82,13 +82,13 @@ mod tests {
             for spec in &table {
                 assert!(!spec.meaning.is_empty(), "{name}.{}: no meaning", spec.key);
                 let default = &params[spec.key];
+                if default.is_null() {
+                    continue; // an optional parameter that is unset by default
+                }
                 let text = match default {
                     serde_json::Value::String(s) => s.clone(),
                     v => v.to_string(),
                 };
-                if default.is_null() {
-                    continue; // an optional parameter that is unset by default
-                }
                 t.set_param(spec.key, &text)
                     .unwrap_or_else(|e| panic!("{name}.{}: default {text} refused: {e}", spec.key));
                 assert_eq!(&t.params()[spec.key], default, "{name}.{}", spec.key);

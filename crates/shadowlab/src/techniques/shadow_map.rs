@@ -17,8 +17,8 @@
 //! is too large, and the blocky edges of magnified texels.
 
 use super::{
-    find_param, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, Visibility, BIAS,
-    RESOLUTION, SLOPE_BIAS,
+    find_param, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, BIAS, RESOLUTION,
+    SLOPE_BIAS,
 };
 use crate::error::{Error, Result};
 use crate::light::{cube_face, light_views, Light, LightView};
@@ -356,14 +356,6 @@ impl ShadowTechnique for ShadowMap {
                 frame.dump_depth(&format!("{}-map{i}.png", self.name), m)?;
             }
         }
-        Ok(Shadows {
-            visibility: Visibility {
-                width: w,
-                height: h,
-                value,
-            },
-            stats,
-            layers: None,
-        })
+        Ok(Shadows::of_frame(frame, value, stats))
     }
 }

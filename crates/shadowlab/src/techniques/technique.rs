@@ -25,6 +25,19 @@ pub struct Shadows {
 }
 
 impl Shadows {
+    /// The result of a technique that shades the nearest surface of each pixel of `frame`
+    /// with the shadow term `value` (one per pixel, row-major).
+    pub fn of_frame(frame: &Frame, value: Vec<Vec3>, stats: Stats) -> Self {
+        Shadows::new(
+            Visibility {
+                width: frame.view.width,
+                height: frame.view.height,
+                value,
+            },
+            stats,
+        )
+    }
+
     /// The result of a technique that shades the nearest surface of each pixel only.
     pub fn new(visibility: Visibility, stats: Stats) -> Self {
         Shadows {

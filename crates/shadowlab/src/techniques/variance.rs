@@ -24,7 +24,7 @@
 //! the shadow lightens. Reduction darkens penumbrae. Point-light cube faces filter up to
 //! their own edges only.
 
-use super::filtering::{frame_shadows, DepthRange, FilterSettings, FilteredMaps, MapLayout};
+use super::filtering::{DepthRange, FilterSettings, FilteredMaps, MapLayout};
 use super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
 use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
 use crate::error::Result;
@@ -177,7 +177,7 @@ impl ShadowTechnique for Variance {
             |d, mo| chebyshev(d, mo[0], mo[1], min_var, reduction),
         )?;
         stats.count("mip_levels", maps.mip_levels() as f64);
-        Ok(frame_shadows(frame, value, stats))
+        Ok(Shadows::of_frame(frame, value, stats))
     }
 }
 

@@ -132,7 +132,7 @@ pub use tree::MAX_EFFECTIVE_RESOLUTION;
 use super::shadow_map::DIRECTIONAL_PAD;
 use super::technique::{ParamSpec, ShadowTechnique, Shadows};
 use crate::error::Result;
-use crate::frame::{Frame, Stats, Visibility};
+use crate::frame::{Frame, Stats};
 use crate::light::light_views;
 use cost::{cost_model, CostModel};
 use node_creation::Refinement;
@@ -338,12 +338,7 @@ impl ShadowTechnique for Adaptive {
         if frame.dumping() {
             dump::write_dump(tree, frame)?;
         }
-        let visibility = Visibility {
-            width: frame.view.width,
-            height: frame.view.height,
-            value,
-        };
-        Ok(Shadows::new(visibility, stats))
+        Ok(Shadows::of_frame(frame, value, stats))
     }
 }
 

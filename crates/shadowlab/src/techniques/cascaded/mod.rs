@@ -37,9 +37,7 @@ use super::shadow_map::{
     render_depth_map, ShadowMap, DEFAULT_CONSTANT_BIAS, DEFAULT_PCF_KERNEL, DEFAULT_RESOLUTION,
     DEFAULT_SLOPE_BIAS,
 };
-use super::{
-    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
-};
+use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
 use crate::error::{Error, Result};
 use crate::light::{Light, LightView};
 use crate::math::Vec3;
@@ -422,13 +420,6 @@ impl ShadowTechnique for Cascaded {
         if frame.dumping() {
             dump(frame, &cascades, &which, &value)?;
         }
-        Ok(Shadows::new(
-            Visibility {
-                width: frame.view.width,
-                height: frame.view.height,
-                value,
-            },
-            stats,
-        ))
+        Ok(Shadows::of_frame(frame, value, stats))
     }
 }

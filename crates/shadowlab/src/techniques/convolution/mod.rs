@@ -66,9 +66,7 @@ pub use expansion::{sin_cos_pi, Expansion, DEFAULT_ALPHA, DEFAULT_M, MAX_M};
 pub use offset::{DEFAULT_SCALE, LIT_MARGIN, MAX_OFFSET, OFFSET_PLATEAU_TOLERANCE};
 pub use reconstruction::Reconstruction;
 
-use super::filtering::{
-    frame_shadows, Channel, DepthRange, FilterSettings, FilteredMaps, MapLayout,
-};
+use super::filtering::{Channel, DepthRange, FilterSettings, FilteredMaps, MapLayout};
 use super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
 use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
 use crate::error::{Error, Result};
@@ -294,6 +292,6 @@ impl ShadowTechnique for Convolution {
             Precision::U8 => self.run::<u8>(frame, &mut stats)?,
             Precision::F32 => self.run::<f32>(frame, &mut stats)?,
         };
-        Ok(frame_shadows(frame, value, stats))
+        Ok(Shadows::of_frame(frame, value, stats))
     }
 }

@@ -61,7 +61,7 @@ pub use footprint::{light_footprint, Footprint};
 pub use lookup::{level_of_detail, Filter, Lod, DEFAULT_ANISOTROPY, MAX_ANISOTROPY};
 pub use mip::MipChain;
 pub use prefiltered::{
-    check_map_size, frame_shadows, texel_rows, FilteredMaps, MapLayout, MAX_FILTERED_MAP_BYTES,
+    check_map_size, texel_rows, FilteredMaps, MapLayout, MAX_FILTERED_MAP_BYTES,
 };
 pub use receivers::{MinPyramid, ReceiverDepths, MAX_RECEIVER_SLOPE};
 pub use settings::FilterSettings;

@@ -5,7 +5,6 @@
 //! footprint and hand them to the technique's test ([`FilteredMaps::shade`]).
 
 use super::super::shadow_map::render_light_maps;
-use super::super::technique::Shadows;
 use super::depth_range::DepthRange;
 use super::footprint::light_footprint;
 use super::mip::MipChain;
@@ -14,7 +13,7 @@ use super::settings::FilterSettings;
 use super::texture::{chans, with_channels, Channel, Texture};
 use super::{light_view_index, view_count, PIXEL_CHUNK};
 use crate::error::{Error, Result};
-use crate::frame::{Frame, Stats, Visibility};
+use crate::frame::{Frame, Stats};
 use crate::light::LightView;
 use crate::math::Vec3;
 use crate::picture::RgbImage;
@@ -76,18 +75,6 @@ pub fn texel_rows<'e, T: Channel>(
         }
         T::store_row(&v, row);
     }
-}
-
-/// The result of a technique that shades `frame` with the shadow term `value`.
-pub fn frame_shadows(frame: &Frame, value: Vec<Vec3>, stats: Stats) -> Shadows {
-    Shadows::new(
-        Visibility {
-            width: frame.view.width,
-            height: frame.view.height,
-            value,
-        },
-        stats,
-    )
 }
 
 /// Pre-filtered light maps of one frame: per light view, the encoded map with its mip

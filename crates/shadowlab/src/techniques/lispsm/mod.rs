@@ -35,9 +35,7 @@ use super::shadow_map::{
     render_depth_map, ShadowMap, DEFAULT_CONSTANT_BIAS, DEFAULT_RESOLUTION, DEFAULT_SLOPE_BIAS,
     DIRECTIONAL_PAD,
 };
-use super::{
-    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
-};
+use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
 use crate::error::{Error, Result};
 use crate::light::{Light, LightView};
 use crate::math::{Mat4, Vec3};
@@ -307,14 +305,7 @@ impl ShadowTechnique for LightSpacePerspective {
                     }
                 })
                 .collect();
-            return Ok(Shadows::new(
-                Visibility {
-                    width: view.width,
-                    height: view.height,
-                    value,
-                },
-                stats,
-            ));
+            return Ok(Shadows::of_frame(frame, value, stats));
         };
         let value = stats.stage("lookup", || self.lookup(frame, &m));
         stats.memory_bytes = m.map.depth.len() as u64 * 4;
@@ -323,13 +314,6 @@ impl ShadowTechnique for LightSpacePerspective {
         if frame.dumping() {
             frame.dump_depth("lispsm-map0.png", &m.map)?;
         }
-        Ok(Shadows::new(
-            Visibility {
-                width: frame.view.width,
-                height: frame.view.height,
-                value,
-            },
-            stats,
-        ))
+        Ok(Shadows::of_frame(frame, value, stats))
     }
 }

@@ -24,7 +24,7 @@
 //! almost as VSM does; very large exponents lose precision for receivers near the far
 //! end of the range.
 
-use super::super::filtering::{frame_shadows, Channel, FilterSettings, FilteredMaps, MapLayout};
+use super::super::filtering::{Channel, FilterSettings, FilteredMaps, MapLayout};
 use super::super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
 use super::super::variance::{chebyshev, texel_depth_and_variance, DEFAULT_MIN_VARIANCE};
 use super::super::{
@@ -243,7 +243,7 @@ impl ShadowTechnique for ExponentialVariance {
             Bits::B16 => self.render_with::<F16>(frame, &mut stats)?,
             Bits::B32 => self.render_with::<f32>(frame, &mut stats)?,
         };
-        Ok(frame_shadows(frame, value, stats))
+        Ok(Shadows::of_frame(frame, value, stats))
     }
 }
 

@@ -26,7 +26,7 @@
 //! more than three distinct depths); the bias slightly lightens contact shadows; 16-bit
 //! storage rounds the moments, which the bias hides at the cost of a little leaking.
 
-use super::super::filtering::{frame_shadows, Channel, FilterSettings, FilteredMaps, MapLayout};
+use super::super::filtering::{Channel, FilterSettings, FilteredMaps, MapLayout};
 use super::super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
 use super::super::{
     check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats,
@@ -258,7 +258,7 @@ impl ShadowTechnique for MomentShadowMap {
             Bits::B16 => self.render_with::<Unorm16>(frame, &mut stats, true)?,
             Bits::B32 => self.render_with::<f32>(frame, &mut stats, false)?,
         };
-        Ok(frame_shadows(frame, value, stats))
+        Ok(Shadows::of_frame(frame, value, stats))
     }
 }
 

@@ -109,9 +109,7 @@ pub use post_space::{PostLight, PostSpace, DIRECTIONAL_DISTANCE_RATIO, SHIFT_SLA
 use super::shadow_map::{
     check_resolution, DEFAULT_CONSTANT_BIAS, DEFAULT_RESOLUTION, DEFAULT_SLOPE_BIAS,
 };
-use super::{
-    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
-};
+use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
 use crate::error::Result;
 use crate::light::Light;
 use crate::math::{Mat4, Vec3, Vec4};
@@ -218,15 +216,7 @@ impl ShadowTechnique for Perspective {
                 })
                 .collect();
             stats.count("maps", 0.0);
-            return Ok(Shadows {
-                visibility: Visibility {
-                    width: w,
-                    height: h,
-                    value,
-                },
-                stats,
-                layers: None,
-            });
+            return Ok(Shadows::of_frame(frame, value, stats));
         };
         let Some(mut setup) = stats.stage("body", || build_setup(frame, &receivers, res)) else {
             // No post-space map fits this frame: fall back to a uniform shadow map with the
@@ -255,15 +245,7 @@ impl ShadowTechnique for Perspective {
         if frame.dumping() {
             dump(frame, &setup, res)?;
         }
-        Ok(Shadows {
-            visibility: Visibility {
-                width: w,
-                height: h,
-                value,
-            },
-            stats,
-            layers: None,
-        })
+        Ok(Shadows::of_frame(frame, value, stats))
     }
 }
 
