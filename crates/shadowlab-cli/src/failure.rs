@@ -49,19 +49,12 @@ impl<T, E: Display> InputContext<T> for Result<T, E> {
     }
 }
 
-/// The exit status of a library error, by its kind.
+/// The exit status of a library error, by its kind ([`shadowlab::Error::is_bad_input`]).
 pub fn library_code(e: &shadowlab::Error) -> u8 {
-    use shadowlab::Error;
-    match e {
-        // A file that cannot be read, a malformed file, an unusable scene, a parameter, a
-        // limit the input would exceed: all the user's input.
-        Error::Io { .. }
-        | Error::Format { .. }
-        | Error::Scene { .. }
-        | Error::Param(_)
-        | Error::Limit(_) => BAD_INPUT,
-        // Writing an output failed after its checks passed; shadowlab itself broke.
-        Error::Output { .. } | Error::Internal(_) => INTERNAL,
+    if e.is_bad_input() {
+        BAD_INPUT
+    } else {
+        INTERNAL
     }
 }
 

@@ -75,8 +75,20 @@ impl Error {
         }
     }
 
-    /// True when the error is the user's input (exit code 2), false for other failures.
+    /// True when the error is the user's input (exit code 2), false for other failures
+    /// (exit code 1). Every kind is named, so a new one must say which it is.
     pub fn is_bad_input(&self) -> bool {
-        !matches!(self, Error::Output { .. } | Error::Internal(_))
+        match self {
+            // A file that cannot be read, a malformed file, an unusable scene, a parameter,
+            // a limit the input would exceed: all the user's input.
+            Error::Io { .. }
+            | Error::Format { .. }
+            | Error::Scene { .. }
+            | Error::Param(_)
+            | Error::Limit(_) => true,
+            // Writing an output failed after its checks passed, or shadowlab's own
+            // invariant broke.
+            Error::Output { .. } | Error::Internal(_) => false,
+        }
     }
 }
