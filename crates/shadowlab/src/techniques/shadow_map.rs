@@ -199,10 +199,14 @@ impl ShadowMap {
     }
 }
 
+/// The smallest cos θ the slope term divides by: a receiver edge-on to the light would make
+/// tan θ infinite; its slope factor is [`MAX_SLOPE`] either way, long before this.
+const MIN_COSINE: f32 = 1e-6;
+
 /// The depth offset of a receiver, in world units (see the module doc).
 #[inline]
 pub fn receiver_bias(texel: f32, n: Vec3, l: Vec3, bias: f32, slope_bias: f32) -> f32 {
-    let cos = n.dot(l).clamp(1e-6, 1.0);
+    let cos = n.dot(l).clamp(MIN_COSINE, 1.0);
     let tan = ((1.0 - cos * cos).max(0.0).sqrt() / cos).min(MAX_SLOPE);
     texel * (bias + slope_bias * tan)
 }
