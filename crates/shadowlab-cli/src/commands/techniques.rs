@@ -31,7 +31,8 @@ struct Parameter {
 
 /// What the technique says of its parameters: every key `params()` lists with its
 /// default, and the range and meaning of its parameter table (`param_specs()`, the table
-/// `set_param` validates against; "-" for a key the table lacks).
+/// `set_param` validates against; every technique's table names exactly its `params()`
+/// keys, and "-" shows a key it would lack).
 fn parameters(t: &dyn ShadowTechnique) -> Vec<Parameter> {
     let specs = t.param_specs();
     t.params()

@@ -17,8 +17,8 @@
 //! is too large, and the blocky edges of magnified texels.
 
 use super::{
-    find_param, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, BIAS, RESOLUTION,
-    SLOPE_BIAS,
+    find_param, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, BIAS,
+    RESOLUTION, SLOPE_BIAS,
 };
 use crate::error::{Error, Result};
 use crate::light::{cube_face, light_views, Light, LightView};
@@ -291,11 +291,7 @@ impl ShadowTechnique for ShadowMap {
             "bias" => self.bias = spec.f32(t, value)?,
             "slope-bias" => self.slope_bias = spec.f32(t, value)?,
             "kernel" => self.kernel = spec.u32(t, value)?,
-            _ => {
-                return Err(Error::Internal(format!(
-                    "{t}.{key} is in the table but not set"
-                )))
-            }
+            _ => return Err(not_read(t, key)),
         }
         Ok(())
     }

@@ -56,9 +56,7 @@ pub trait ShadowTechnique: Send {
     fn params(&self) -> BTreeMap<String, serde_json::Value>;
     /// Every parameter's key, range and meaning, in the order [`ShadowTechnique::params`]
     /// lists them: the table [`ShadowTechnique::set_param`] validates against.
-    fn param_specs(&self) -> Vec<ParamSpec> {
-        Vec::new()
-    }
+    fn param_specs(&self) -> Vec<ParamSpec>;
     /// Sets one parameter from its text form; unknown keys and bad values are errors
     /// that list what is accepted.
     fn set_param(&mut self, key: &str, value: &str) -> Result<()>;
@@ -226,6 +224,20 @@ pub fn find_param(technique: &str, table: &[ParamSpec], key: &str) -> Result<Par
         let known: Vec<&str> = table.iter().map(|s| s.key).collect();
         unknown_param(technique, key, &known)
     })
+}
+
+/// The error for a key that is in a technique's table but that its `set_param` does not
+/// read: a fault of the technique, not of the input.
+pub fn not_read(technique: &str, key: &str) -> Error {
+    Error::Internal(format!(
+        "parameter {technique}.{key} is in its table but not read"
+    ))
+}
+
+/// `table` in key order, the order [`ShadowTechnique::params`] lists the keys in.
+pub fn in_key_order(mut table: Vec<ParamSpec>) -> Vec<ParamSpec> {
+    table.sort_by_key(|s| s.key);
+    table
 }
 
 /// The side of a square light-space map, in texels.

@@ -26,7 +26,10 @@
 
 use super::filtering::{DepthRange, FilterSettings, FilteredMaps, MapLayout};
 use super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
-use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
+use super::{
+    find_param, in_key_order, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
+    Stats, RESOLUTION,
+};
 use crate::error::Result;
 use crate::raster::{DepthBuffer, NO_TRIANGLE};
 use std::collections::BTreeMap;
@@ -62,14 +65,23 @@ impl Default for Variance {
     }
 }
 
-const KEYS: &[&str] = &[
-    "resolution",
-    "min-variance",
+/// The parameters of vsm's own, beside the filtering ones.
+const OWN: &[ParamSpec] = &[BLEED_REDUCTION, MIN_VARIANCE, RESOLUTION];
+
+/// The light-bleeding reduction of vsm and evsm.
+pub const BLEED_REDUCTION: ParamSpec = ParamSpec::real(
     "bleed-reduction",
-    "blur",
-    "filter",
-    "max-aniso",
-];
+    0.0,
+    0.99,
+    "lit fractions below this become 0 and the rest are rescaled: less light bleeding, darker penumbrae",
+);
+/// The variance floor of vsm and evsm.
+pub const MIN_VARIANCE: ParamSpec = ParamSpec::real(
+    "min-variance",
+    0.0,
+    1.0,
+    "smallest variance the Chebyshev bound uses, against acne on flat receivers",
+);
 
 /// Chebyshev's upper bound on the lit fraction of a receiver at depth `d`, from the filtered
 /// moments `(μ, E[z²])`, with the variance floored at `min_variance` and the light-bleeding
@@ -137,20 +149,21 @@ impl ShadowTechnique for Variance {
         m
     }
 
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        in_key_order([OWN, &FilterSettings::SPECS].concat())
+    }
+
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
         let t = "vsm";
+        let spec = find_param(t, &self.param_specs(), key)?;
         if self.filtering.set_param(t, key, value)? {
             return Ok(());
         }
         match key {
             "resolution" => self.resolution = check_resolution(t, parse_value(t, key, value)?)?,
-            "min-variance" => {
-                self.min_variance = check_range(t, key, parse_value(t, key, value)?, 0.0, 1.0)?
-            }
-            "bleed-reduction" => {
-                self.bleed_reduction = check_range(t, key, parse_value(t, key, value)?, 0.0, 0.99)?
-            }
-            _ => return Err(unknown_param(t, key, KEYS)),
+            "min-variance" => self.min_variance = spec.f32(t, value)?,
+            "bleed-reduction" => self.bleed_reduction = spec.f32(t, value)?,
+            _ => return Err(not_read(t, key)),
         }
         Ok(())
     }

@@ -37,8 +37,11 @@ use super::shadow_map::{
     render_depth_map, ShadowMap, DEFAULT_CONSTANT_BIAS, DEFAULT_PCF_KERNEL, DEFAULT_RESOLUTION,
     DEFAULT_SLOPE_BIAS,
 };
-use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
-use crate::error::{Error, Result};
+use super::{
+    find_param, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, BIAS,
+    RESOLUTION, SLOPE_BIAS,
+};
+use crate::error::Result;
 use crate::light::{Light, LightView};
 use crate::math::Vec3;
 use crate::raster::DepthBuffer;
@@ -106,17 +109,50 @@ impl Default for Cascaded {
     }
 }
 
-const KEYS: &[&str] = &[
-    "resolution",
-    "cascades",
-    "cascade-resolution",
-    "lambda",
-    "stabilize",
-    "blend",
-    "depth-bounds",
-    "bias",
-    "slope-bias",
-    "kernel",
+/// The parameter table, in key order.
+const TABLE: &[ParamSpec] = &[
+    BIAS,
+    ParamSpec::real(
+        "blend",
+        0.0,
+        0.5,
+        "share of a cascade's depth range over which it fades into the next (0: hard seams)",
+    ),
+    ParamSpec::int(
+        "cascade-resolution",
+        1,
+        crate::raster::MAX_RASTER_SIDE as i64,
+        "side of each cascade's map, or auto to share resolution² among the cascades",
+    ),
+    ParamSpec::int(
+        "cascades",
+        1,
+        MAX_CASCADES as i64,
+        "number of view-depth slices, each with its own map",
+    ),
+    ParamSpec::choice(
+        "depth-bounds",
+        &["camera", "sdsm"],
+        "depth range the slices split: the camera's near..far, or the lit receivers' (sdsm)",
+    ),
+    ParamSpec::int(
+        "kernel",
+        0,
+        15,
+        "PCF kernel side in texels, 0 for one nearest-texel test",
+    ),
+    ParamSpec::real(
+        "lambda",
+        0.0,
+        1.0,
+        "split scheme: 0 uniform, 1 logarithmic, between them the practical blend",
+    ),
+    RESOLUTION,
+    SLOPE_BIAS,
+    ParamSpec::flag(
+        "stabilize",
+        "texel-snapped, rotation-invariant windows, so shadows do not shimmer in motion",
+    ),
 ];
 
 /// One cascade: its view depth interval, light view and map.
@@ -350,52 +386,44 @@ impl ShadowTechnique for Cascaded {
         ])
     }
 
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        TABLE.to_vec()
+    }
+
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
         let t = "cascaded";
+        let spec = find_param(t, TABLE, key)?;
         match key {
             "resolution" => self.resolution = check_resolution(t, parse_value(t, key, value)?)?,
-            "cascades" => {
-                self.cascades = check_range(t, key, parse_value(t, key, value)?, 1, MAX_CASCADES)?
-            }
+            "cascades" => self.cascades = spec.usize(t, value)?,
             "cascade-resolution" => {
                 // `auto`: the share of `resolution²`; a number is checked like any map side.
                 self.cascade_resolution = if value.trim() == "auto" {
                     0
                 } else {
-                    let r = parse_value(t, key, value)?;
-                    check_range(t, key, r, 1, crate::raster::MAX_RASTER_SIDE)?
+                    spec.u32(t, value)?
                 };
             }
-            "lambda" => self.lambda = check_range(t, key, parse_value(t, key, value)?, 0.0, 1.0)?,
+            "lambda" => self.lambda = spec.f32(t, value)?,
             "stabilize" => {
+                // The words of a switch are accepted beside the table's true and false.
                 self.stabilize = match value.trim() {
-                    "true" | "on" | "yes" | "1" => true,
-                    "false" | "off" | "no" | "0" => false,
-                    _ => {
-                        return Err(Error::param(format!(
-                            "parameter cascaded.stabilize = {value:?} is not true or false"
-                        )))
-                    }
+                    "on" | "yes" | "1" => true,
+                    "off" | "no" | "0" => false,
+                    _ => spec.bool(t, value)?,
                 }
             }
-            "blend" => self.blend = check_range(t, key, parse_value(t, key, value)?, 0.0, 0.5)?,
+            "blend" => self.blend = spec.f32(t, value)?,
             "depth-bounds" => {
-                self.depth_bounds = match value.trim() {
+                self.depth_bounds = match spec.word(t, value)? {
                     "camera" => DepthBounds::Camera,
-                    "sdsm" => DepthBounds::Sdsm,
-                    _ => {
-                        return Err(Error::param(format!(
-                            "parameter cascaded.depth-bounds = {value:?} is not camera or sdsm"
-                        )))
-                    }
+                    _ => DepthBounds::Sdsm,
                 }
             }
-            "bias" => self.bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?,
-            "slope-bias" => {
-                self.slope_bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?
-            }
-            "kernel" => self.kernel = check_range(t, key, parse_value(t, key, value)?, 0, 15)?,
-            _ => return Err(unknown_param(t, key, KEYS)),
+            "bias" => self.bias = spec.f32(t, value)?,
+            "slope-bias" => self.slope_bias = spec.f32(t, value)?,
+            "kernel" => self.kernel = spec.u32(t, value)?,
+            _ => return Err(not_read(t, key)),
         }
         Ok(())
     }

@@ -68,7 +68,10 @@ pub use reconstruction::Reconstruction;
 
 use super::filtering::{Channel, DepthRange, FilterSettings, FilteredMaps, MapLayout};
 use super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
-use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
+use super::{
+    find_param, in_key_order, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
+    Stats, RESOLUTION,
+};
 use crate::error::{Error, Result};
 use crate::math::Vec3;
 use crate::raster::DepthBuffer;
@@ -117,16 +120,38 @@ impl Default for Convolution {
     }
 }
 
-const KEYS: &[&str] = &[
-    "resolution",
-    "m",
-    "alpha",
-    "offset",
-    "scale",
-    "precision",
-    "blur",
-    "filter",
-    "max-aniso",
+/// The parameters of csm's own, beside the filtering ones.
+const OWN: &[ParamSpec] = &[
+    ParamSpec::real(
+        "alpha",
+        0.0,
+        100.0,
+        "ringing attenuation α of the Fourier coefficients: less overshoot, a flatter step",
+    ),
+    ParamSpec::int(
+        "m",
+        1,
+        MAX_M as i64,
+        "Fourier terms of the expansion: 2M basis images (Section 3.2's M)",
+    ),
+    ParamSpec::real(
+        "offset",
+        0.0,
+        MAX_OFFSET as f64,
+        "normalized depth subtracted from the receiver's, or auto for what this M and α need",
+    ),
+    ParamSpec::choice(
+        "precision",
+        &["u8", "f32"],
+        "storage of the basis images: 8-bit (the paper's) or 32-bit float",
+    ),
+    RESOLUTION,
+    ParamSpec::real(
+        "scale",
+        0.01,
+        100.0,
+        "scale of the reconstructed step before clamping: larger is steeper and sharper",
+    ),
 ];
 
 impl Convolution {
@@ -246,29 +271,28 @@ impl ShadowTechnique for Convolution {
         m
     }
 
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        in_key_order([OWN, &FilterSettings::SPECS].concat())
+    }
+
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
         let t = "csm";
+        let spec = find_param(t, &self.param_specs(), key)?;
         if self.filtering.set_param(t, key, value)? {
             return Ok(());
         }
         match key {
             "resolution" => self.resolution = check_resolution(t, parse_value(t, key, value)?)?,
-            "m" => self.m = check_range(t, key, parse_value(t, key, value)?, 1, MAX_M)?,
-            "alpha" => self.alpha = check_range(t, key, parse_value(t, key, value)?, 0.0, 100.0)?,
+            "m" => self.m = spec.u32(t, value)?,
+            "alpha" => self.alpha = spec.f32(t, value)?,
             "offset" => {
                 self.offset = if value.trim().eq_ignore_ascii_case("auto") {
                     None
                 } else {
-                    Some(check_range(
-                        t,
-                        key,
-                        parse_value(t, key, value)?,
-                        0.0,
-                        MAX_OFFSET,
-                    )?)
+                    Some(spec.f32(t, value)?)
                 }
             }
-            "scale" => self.scale = check_range(t, key, parse_value(t, key, value)?, 0.01, 100.0)?,
+            "scale" => self.scale = spec.f32(t, value)?,
             "precision" => {
                 self.precision = match value.trim().to_ascii_lowercase().as_str() {
                     "u8" | "8" | "8bit" => Precision::U8,
@@ -280,7 +304,7 @@ impl ShadowTechnique for Convolution {
                     }
                 }
             }
-            _ => return Err(unknown_param(t, key, KEYS)),
+            _ => return Err(not_read(t, key)),
         }
         Ok(())
     }

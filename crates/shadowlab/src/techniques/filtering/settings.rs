@@ -1,11 +1,13 @@
 //! The parameters every filtered technique shares: blur kernel, look-up filter and
 //! anisotropy.
 
+use super::blur::MAX_BLUR;
 use super::blur::{blur, parse_blur};
 use super::lookup::{Filter, DEFAULT_ANISOTROPY, MAX_ANISOTROPY};
 use super::mip::MipChain;
 use super::texture::{Channel, Texture};
 use crate::error::Result;
+use crate::techniques::technique::{find_param, ParamSpec};
 
 /// Blur, mip-mapping and look-up settings shared by the filtered techniques.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,8 +31,26 @@ impl Default for FilterSettings {
 }
 
 impl FilterSettings {
-    /// The parameter keys these settings answer to.
-    pub const KEYS: [&'static str; 3] = ["blur", "filter", "max-aniso"];
+    /// The parameters these settings answer to, in key order.
+    pub const SPECS: [ParamSpec; 3] = [
+        ParamSpec::int(
+            "blur",
+            0,
+            MAX_BLUR as i64,
+            "side of the separable binomial blur of the map, odd, or none (0 and 1 too)",
+        ),
+        ParamSpec::choice(
+            "filter",
+            &["bilinear", "trilinear", "anisotropic"],
+            "look-up filter: bilinear on the full map, tri-linear mip-mapped, or anisotropic",
+        ),
+        ParamSpec::int(
+            "max-aniso",
+            1,
+            MAX_ANISOTROPY as i64,
+            "most tri-linear probes of one anisotropic look-up (the paper's 16)",
+        ),
+    ];
 
     /// Adds the settings to a technique's parameter list.
     pub fn params(&self, m: &mut std::collections::BTreeMap<String, serde_json::Value>) {
@@ -44,17 +64,16 @@ impl FilterSettings {
         m.insert("max-aniso".into(), self.max_aniso.into());
     }
 
-    /// Sets one of the keys in [`Self::KEYS`]; `Ok(false)` when `key` is not one of them.
+    /// Sets one of the keys in [`Self::SPECS`]; `Ok(false)` when `key` is not one of them.
     pub fn set_param(&mut self, technique: &str, key: &str, value: &str) -> Result<bool> {
+        if !Self::SPECS.iter().any(|s| s.key == key) {
+            return Ok(false);
+        }
+        let spec = find_param(technique, &Self::SPECS, key)?;
         match key {
             "blur" => self.blur = parse_blur(technique, value)?,
             "filter" => self.filter = Filter::parse(technique, value)?,
-            "max-aniso" => {
-                let v = super::super::technique::parse_value(technique, key, value)?;
-                self.max_aniso =
-                    super::super::technique::check_range(technique, key, v, 1, MAX_ANISOTROPY)?;
-            }
-            _ => return Ok(false),
+            _ => self.max_aniso = spec.u32(technique, value)?,
         }
         Ok(true)
     }

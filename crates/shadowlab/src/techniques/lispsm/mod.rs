@@ -35,7 +35,10 @@ use super::shadow_map::{
     render_depth_map, ShadowMap, DEFAULT_CONSTANT_BIAS, DEFAULT_RESOLUTION, DEFAULT_SLOPE_BIAS,
     DIRECTIONAL_PAD,
 };
-use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
+use super::{
+    find_param, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, BIAS,
+    RESOLUTION, SLOPE_BIAS,
+};
 use crate::error::{Error, Result};
 use crate::light::{Light, LightView};
 use crate::math::{Mat4, Vec3};
@@ -82,7 +85,24 @@ impl Default for LightSpacePerspective {
     }
 }
 
-const KEYS: &[&str] = &["resolution", "n", "bias", "slope-bias", "kernel"];
+/// The parameter table, in key order.
+const TABLE: &[ParamSpec] = &[
+    BIAS,
+    ParamSpec::int(
+        "kernel",
+        0,
+        15,
+        "PCF kernel side in texels, 0 for one nearest-texel test",
+    ),
+    ParamSpec::real(
+        "n",
+        0.0,
+        f32::MAX as f64,
+        "distance of the warp's eye before the body (0 excluded), or auto for the paper's n_opt",
+    ),
+    RESOLUTION,
+    SLOPE_BIAS,
+];
 
 /// Light-space bounds of the lit receivers: x, y, depth ranges and the nearest view depth.
 fn receiver_extent(frame: &Frame, basis: &Mat4) -> Option<([f32; 6], f32)> {
@@ -259,8 +279,13 @@ impl ShadowTechnique for LightSpacePerspective {
         ])
     }
 
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        TABLE.to_vec()
+    }
+
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
         let t = "lispsm";
+        let spec = find_param(t, TABLE, key)?;
         match key {
             "resolution" => self.resolution = check_resolution(t, parse_value(t, key, value)?)?,
             "n" => {
@@ -276,12 +301,10 @@ impl ShadowTechnique for LightSpacePerspective {
                     Some(n)
                 }
             }
-            "bias" => self.bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?,
-            "slope-bias" => {
-                self.slope_bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?
-            }
-            "kernel" => self.kernel = check_range(t, key, parse_value(t, key, value)?, 0, 15)?,
-            _ => return Err(unknown_param(t, key, KEYS)),
+            "bias" => self.bias = spec.f32(t, value)?,
+            "slope-bias" => self.slope_bias = spec.f32(t, value)?,
+            "kernel" => self.kernel = spec.u32(t, value)?,
+            _ => return Err(not_read(t, key)),
         }
         Ok(())
     }

@@ -26,12 +26,15 @@
 
 use super::super::filtering::{Channel, FilterSettings, FilteredMaps, MapLayout};
 use super::super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
-use super::super::variance::{chebyshev, texel_depth_and_variance, DEFAULT_MIN_VARIANCE};
-use super::super::{
-    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats,
+use super::super::variance::{
+    chebyshev, texel_depth_and_variance, BLEED_REDUCTION, DEFAULT_MIN_VARIANCE, MIN_VARIANCE,
 };
-use super::{grey, Bits, F16};
-use crate::error::{Error, Result};
+use super::super::{
+    find_param, in_key_order, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
+    Stats, RESOLUTION,
+};
+use super::{grey, Bits, BITS, F16};
+use crate::error::Result;
 use crate::math::Vec3;
 use std::collections::BTreeMap;
 
@@ -87,17 +90,29 @@ impl Default for ExponentialVariance {
     }
 }
 
-const KEYS: &[&str] = &[
-    "resolution",
-    "moments",
-    "bits",
-    "exponent-pos",
-    "exponent-neg",
-    "min-variance",
-    "bleed-reduction",
-    "blur",
-    "filter",
-    "max-aniso",
+/// The parameters of evsm's own, beside the filtering ones.
+const OWN: &[ParamSpec] = &[
+    BLEED_REDUCTION,
+    BITS,
+    ParamSpec::real(
+        "exponent-neg",
+        1e-6,
+        1e3,
+        "exponent c₋ of the negative warp −e^(−c₋z) (4 moments only), clamped to the storage's",
+    ),
+    ParamSpec::real(
+        "exponent-pos",
+        1e-6,
+        1e3,
+        "exponent c₊ of the positive warp e^(c₊z), clamped to the storage's: larger bleeds less",
+    ),
+    MIN_VARIANCE,
+    ParamSpec::choice(
+        "moments",
+        &["2", "4"],
+        "2: the positive warp's two moments; 4: both warps, the smaller bound",
+    ),
+    RESOLUTION,
 ];
 
 /// The exponential warps of a normalized depth `d`, with exponents `(c⁺, c⁻)`: `(w⁺, w⁻)`.
@@ -201,37 +216,25 @@ impl ShadowTechnique for ExponentialVariance {
         m
     }
 
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        in_key_order([OWN, &FilterSettings::SPECS].concat())
+    }
+
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
         let t = "evsm";
+        let spec = find_param(t, &self.param_specs(), key)?;
         if self.filtering.set_param(t, key, value)? {
             return Ok(());
         }
         match key {
             "resolution" => self.resolution = check_resolution(t, parse_value(t, key, value)?)?,
-            "moments" => {
-                self.moments = match parse_value::<usize>(t, key, value)? {
-                    n @ (2 | 4) => n,
-                    n => {
-                        return Err(Error::param(format!(
-                            "parameter evsm.moments = {n} is not 2 or 4"
-                        )))
-                    }
-                }
-            }
-            "bits" => self.bits = Bits::parse(t, key, value)?,
-            "exponent-pos" => {
-                self.exponent_pos = check_range(t, key, parse_value(t, key, value)?, 1e-6, 1e3)?
-            }
-            "exponent-neg" => {
-                self.exponent_neg = check_range(t, key, parse_value(t, key, value)?, 1e-6, 1e3)?
-            }
-            "min-variance" => {
-                self.min_variance = check_range(t, key, parse_value(t, key, value)?, 0.0, 1.0)?
-            }
-            "bleed-reduction" => {
-                self.bleed_reduction = check_range(t, key, parse_value(t, key, value)?, 0.0, 0.99)?
-            }
-            _ => return Err(unknown_param(t, key, KEYS)),
+            "moments" => self.moments = parse_value(t, key, spec.word(t, value)?)?,
+            "bits" => self.bits = Bits::parse(t, key, spec.word(t, value)?)?,
+            "exponent-pos" => self.exponent_pos = spec.f32(t, value)?,
+            "exponent-neg" => self.exponent_neg = spec.f32(t, value)?,
+            "min-variance" => self.min_variance = spec.f32(t, value)?,
+            "bleed-reduction" => self.bleed_reduction = spec.f32(t, value)?,
+            _ => return Err(not_read(t, key)),
         }
         Ok(())
     }

@@ -17,7 +17,7 @@ pub mod hamburger;
 pub mod msm;
 
 use super::filtering::Channel;
-use super::technique::parse_value;
+use super::technique::{parse_value, ParamSpec};
 use crate::error::{Error, Result};
 
 /// Bits per stored moment: a half float / 16-bit normalized format, or 32-bit float.
@@ -28,6 +28,13 @@ pub enum Bits {
     /// 32-bit float per moment.
     B32,
 }
+
+/// The storage size of the moments of evsm and msm.
+pub const BITS: ParamSpec = ParamSpec::choice(
+    "bits",
+    &["16", "32"],
+    "bits per stored moment: 16 (half float for evsm, quantized unorm for msm) or 32-bit float",
+);
 
 impl Bits {
     /// The number of bits.

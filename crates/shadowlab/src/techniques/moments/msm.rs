@@ -29,10 +29,11 @@
 use super::super::filtering::{Channel, FilterSettings, FilteredMaps, MapLayout};
 use super::super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
 use super::super::{
-    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats,
+    find_param, in_key_order, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
+    Stats, RESOLUTION,
 };
 use super::hamburger;
-use super::{grey, Bits, Unorm16, UNORM16_MAX};
+use super::{grey, Bits, Unorm16, BITS, UNORM16_MAX};
 use crate::error::Result;
 use crate::math::Vec3;
 use glam::{DMat4, DVec4};
@@ -140,14 +141,22 @@ impl Default for MomentShadowMap {
     }
 }
 
-const KEYS: &[&str] = &[
-    "resolution",
-    "bits",
-    "moment-bias",
-    "depth-bias",
-    "blur",
-    "filter",
-    "max-aniso",
+/// The parameters of msm's own, beside the filtering ones.
+const OWN: &[ParamSpec] = &[
+    BITS,
+    ParamSpec::real(
+        "depth-bias",
+        0.0,
+        1.0,
+        "normalized depth subtracted from the receiver's before the Hamburger bound",
+    ),
+    ParamSpec::real(
+        "moment-bias",
+        0.0,
+        0.5,
+        "weight α of the blend towards a fixed distribution; the default depends on bits",
+    ),
+    RESOLUTION,
 ];
 
 impl MomentShadowMap {
@@ -232,21 +241,22 @@ impl ShadowTechnique for MomentShadowMap {
         m
     }
 
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        in_key_order([OWN, &FilterSettings::SPECS].concat())
+    }
+
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
         let t = "msm";
+        let spec = find_param(t, &self.param_specs(), key)?;
         if self.filtering.set_param(t, key, value)? {
             return Ok(());
         }
         match key {
             "resolution" => self.resolution = check_resolution(t, parse_value(t, key, value)?)?,
-            "bits" => self.bits = Bits::parse(t, key, value)?,
-            "moment-bias" => {
-                self.moment_bias = Some(check_range(t, key, parse_value(t, key, value)?, 0.0, 0.5)?)
-            }
-            "depth-bias" => {
-                self.depth_bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1.0)?
-            }
-            _ => return Err(unknown_param(t, key, KEYS)),
+            "bits" => self.bits = Bits::parse(t, key, spec.word(t, value)?)?,
+            "moment-bias" => self.moment_bias = Some(spec.f32(t, value)?),
+            "depth-bias" => self.depth_bias = spec.f32(t, value)?,
+            _ => return Err(not_read(t, key)),
         }
         Ok(())
     }

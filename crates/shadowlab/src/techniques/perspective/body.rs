@@ -11,11 +11,10 @@
 //! between a receiver and the light lies in `H`.
 
 use super::fit::frame_of;
-use super::fit::pick_up;
 use super::near_plane::Receivers;
 use crate::frame::Frame;
 use crate::light::Light;
-use crate::math::{Aabb, Vec3};
+use crate::math::{pick_up_f64, Aabb, Vec3};
 use glam::DVec3;
 
 /// The box of visible receivers is widened by this fraction of the scene's diagonal on
@@ -254,7 +253,7 @@ fn hull_planes(b: &Body, light: LightPoint, tol: f64) -> Vec<Plane> {
 fn spot_planes(position: Vec3, target: Vec3, fov_deg: f32) -> [Plane; 4] {
     let l = position.as_dvec3();
     let axis = (target.as_dvec3() - l).normalize();
-    let (right, up) = frame_of(axis, pick_up(axis));
+    let (right, up) = frame_of(axis, pick_up_f64(axis));
     // Slightly wider than the cone, so rounding never cuts a lit receiver off.
     let half =
         ((fov_deg as f64).to_radians() * 0.5).tan() * (1.0 + TANGENT_WIDENING) + SPOT_TANGENT_SLACK;

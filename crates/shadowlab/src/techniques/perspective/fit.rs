@@ -11,6 +11,7 @@
 
 use super::post_space::{PostBody, PostLight, PostLightSource, MIN_POST_EXTENT};
 use crate::light::CUBE_FACES;
+use crate::math::pick_up_f64;
 use glam::{DMat4, DVec3, DVec4};
 
 /// Largest tangent of the angle between the map axis and a body vertex for which a point
@@ -89,15 +90,6 @@ pub(super) fn fit_maps(
     (maps, Some(faces))
 }
 
-/// An up vector not parallel to `dir`.
-pub(super) fn pick_up(dir: DVec3) -> DVec3 {
-    if dir.normalize().y.abs() > 0.99 {
-        DVec3::Z
-    } else {
-        DVec3::Y
-    }
-}
-
 /// A matrix from its four rows.
 fn from_rows(r: [DVec4; 4]) -> DMat4 {
     DMat4::from_cols(r[0], r[1], r[2], r[3]).transpose()
@@ -136,7 +128,7 @@ impl Extent {
 /// Orthographic map along the post-space light direction `dir` (towards the light).
 fn fit_orthographic(dir: DVec3, centre: DVec3, pts: &[DVec3], res: u32) -> MapFit {
     // The frame of `dir` mirrored (right = up × dir): the same numbers as computing it so.
-    let (right, up) = frame_of(dir, pick_up(dir));
+    let (right, up) = frame_of(dir, pick_up_f64(dir));
     let right = -right;
     // Light view: x = right, y = up, z = towards the light; depth = −z grows away from it.
     let mut e = Extent::EMPTY;
@@ -191,7 +183,7 @@ fn fit_perspective(q: DVec3, pts: &[DVec3], res: u32, max_tangent: f64) -> Optio
     // Two passes: the second recentres the axis on the first window.
     let mut window = None;
     for _ in 0..2 {
-        let (right, up) = frame_of(axis, pick_up(axis));
+        let (right, up) = frame_of(axis, pick_up_f64(axis));
         let mut e = Extent::EMPTY;
         for p in pts {
             let r = *p - q;

@@ -109,7 +109,10 @@ pub use post_space::{PostLight, PostSpace, DIRECTIONAL_DISTANCE_RATIO, SHIFT_SLA
 use super::shadow_map::{
     check_resolution, DEFAULT_CONSTANT_BIAS, DEFAULT_RESOLUTION, DEFAULT_SLOPE_BIAS,
 };
-use super::{check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats};
+use super::{
+    find_param, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, BIAS,
+    RESOLUTION, SLOPE_BIAS,
+};
 use crate::error::Result;
 use crate::light::Light;
 use crate::math::{Mat4, Vec3, Vec4};
@@ -183,15 +186,18 @@ impl ShadowTechnique for Perspective {
         ])
     }
 
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        vec![BIAS, RESOLUTION, SLOPE_BIAS]
+    }
+
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
         let t = "psm";
+        let spec = find_param(t, &self.param_specs(), key)?;
         match key {
             "resolution" => self.resolution = check_resolution(t, parse_value(t, key, value)?)?,
-            "bias" => self.bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?,
-            "slope-bias" => {
-                self.slope_bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?
-            }
-            _ => return Err(unknown_param(t, key, &["resolution", "bias", "slope-bias"])),
+            "bias" => self.bias = spec.f32(t, value)?,
+            "slope-bias" => self.slope_bias = spec.f32(t, value)?,
+            _ => return Err(not_read(t, key)),
         }
         Ok(())
     }

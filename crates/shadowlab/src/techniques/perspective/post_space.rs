@@ -14,7 +14,7 @@
 
 use crate::camera::Camera;
 use crate::light::Light;
-use crate::math::Mat4;
+use crate::math::{look_along_rh_f64, Mat4};
 use glam::{DMat4, DVec3, DVec4};
 
 /// The camera is shifted back only when the body reaches nearer than this fraction of the
@@ -59,19 +59,6 @@ pub struct PostSpace {
     pub body: Vec<DVec3>,
     /// Number of maps (1, or up to 6 for a cube around a post-perspective point light).
     pub maps: usize,
-}
-
-/// Right-handed view matrix (looking down −Z) in f64.
-fn look_at(eye: DVec3, forward: DVec3, up: DVec3) -> DMat4 {
-    let f = forward.normalize();
-    let s = f.cross(up).normalize();
-    let u = s.cross(f);
-    DMat4::from_cols(
-        DVec4::new(s.x, u.x, -f.x, 0.0),
-        DVec4::new(s.y, u.y, -f.y, 0.0),
-        DVec4::new(s.z, u.z, -f.z, 0.0),
-        DVec4::new(-eye.dot(s), -eye.dot(u), eye.dot(f), 1.0),
-    )
 }
 
 /// The OpenGL perspective projection (NDC cube `[-1, 1]³`), as the paper uses: the
@@ -122,7 +109,7 @@ impl VirtualCamera {
             cam.aspect() as f64,
             near,
             vfar,
-        ) * look_at(veye, fwd, cam.up.as_dvec3());
+        ) * look_along_rh_f64(veye, fwd, cam.up.as_dvec3());
         VirtualCamera {
             shift,
             near,

@@ -130,9 +130,10 @@ use super::shadow_map::{
     DEFAULT_CONSTANT_BIAS, DEFAULT_SLOPE_BIAS,
 };
 use super::{
-    check_range, parse_value, unknown_param, Frame, ShadowTechnique, Shadows, Stats, Visibility,
+    check_range, find_param, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
+    Stats, Visibility, BIAS, RESOLUTION, SLOPE_BIAS,
 };
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::math::{ndc_to_uv, Vec3};
 use crate::sampling::PatternKind;
 use blockers::Blocker;
@@ -186,7 +187,23 @@ impl Default for Subpixel {
     }
 }
 
-const PARAMS: &[&str] = &["samples", "pattern", "resolution", "bias", "slope-bias"];
+/// The parameter table, in key order.
+const TABLE: &[ParamSpec] = &[
+    BIAS,
+    ParamSpec::choice(
+        "pattern",
+        &["grid", "rotated-grid"],
+        "where the sub-samples of a pixel lie: a regular grid or a rotated grid",
+    ),
+    RESOLUTION,
+    ParamSpec::int(
+        "samples",
+        1,
+        MAX_SAMPLES as i64,
+        "sub-samples per pixel of a silhouette pixel (the paper's 32)",
+    ),
+    SLOPE_BIAS,
+];
 
 impl ShadowTechnique for Subpixel {
     fn name(&self) -> &'static str {
@@ -203,25 +220,26 @@ impl ShadowTechnique for Subpixel {
         ])
     }
 
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        TABLE.to_vec()
+    }
+
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
         let t = "subpixel";
+        let spec = find_param(t, TABLE, key)?;
         match key {
-            "samples" => {
-                self.samples = check_range(t, key, parse_value(t, key, value)?, 1, MAX_SAMPLES)?
-            }
+            "samples" => self.samples = spec.u32(t, value)?,
             "pattern" => {
-                self.pattern = value.trim().parse().map_err(|_| {
-                    Error::param(format!(
-                        "parameter subpixel.pattern = {value:?} is not one of grid, rotated-grid"
-                    ))
-                })?
+                // `rgss` is accepted beside the table's words; anything else gets its error.
+                self.pattern = value
+                    .trim()
+                    .parse()
+                    .or_else(|_| spec.word(t, value)?.parse())?
             }
             "resolution" => self.resolution = check_resolution(t, parse_value(t, key, value)?)?,
-            "bias" => self.bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?,
-            "slope-bias" => {
-                self.slope_bias = check_range(t, key, parse_value(t, key, value)?, 0.0, 1000.0)?
-            }
-            _ => return Err(unknown_param(t, key, PARAMS)),
+            "bias" => self.bias = spec.f32(t, value)?,
+            "slope-bias" => self.slope_bias = spec.f32(t, value)?,
+            _ => return Err(not_read(t, key)),
         }
         Ok(())
     }
