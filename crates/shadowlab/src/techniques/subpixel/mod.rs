@@ -112,6 +112,7 @@
 //! by their centre, so the rim of a spot light's cone is not anti-aliased.
 
 mod blockers;
+mod dump;
 mod facets;
 mod lookup_table;
 mod pairs;
@@ -415,7 +416,7 @@ fn run<M: Mask>(
 
     let (w, h) = (frame.view.width, frame.view.height);
     if frame.dumping() {
-        dump(frame, &st.maps, &st.masks, &pairs.facets, w, h)?;
+        dump::dump(frame, &st.maps, &st.masks, &pairs.facets, w, h)?;
     }
     Ok(Visibility {
         width: w,
@@ -475,35 +476,4 @@ fn record_counters<M: Mask>(
             + pairs.tt_blocker.len() * 12) as u64
         + (facets.len() * std::mem::size_of::<Facet>()
             + blockers.len() * std::mem::size_of::<Option<Blocker>>()) as u64;
-}
-
-/// Writes the depth maps, the silhouette mask maps (white: silhouette texel, grey: hidden
-/// silhouette) and the silhouette pixels.
-fn dump(
-    frame: &Frame,
-    maps: &LightMaps,
-    masks: &[MaskMap],
-    facets: &[Facet],
-    w: u32,
-    h: u32,
-) -> Result<()> {
-    for (i, (m, mm)) in maps.maps.iter().zip(masks).enumerate() {
-        frame.dump_depth(&format!("subpixel-depth{i}.png"), m)?;
-        frame.dump_grey(&format!("subpixel-silhouette-mask{i}.png"), || {
-            image::GrayImage::from_fn(mm.res, mm.res, |x, y| {
-                image::Luma([match mm.mask[(y * mm.res + x) as usize] {
-                    1 => 255,
-                    2 => 96,
-                    _ => 0,
-                }])
-            })
-        })?;
-    }
-    frame.dump_grey("subpixel-silhouette-pixels.png", || {
-        let mut img = image::GrayImage::new(w, h);
-        for f in facets {
-            img.put_pixel(f.k % w, f.k / w, image::Luma([255]));
-        }
-        img
-    })
 }
