@@ -87,16 +87,30 @@ fn sizing_key(t: &dyn ShadowTechnique) -> Option<&'static str> {
     }
 }
 
+/// The smallest map side the suite sizes a technique to: below it a map holds no shadow
+/// worth measuring.
+const MIN_RESOLUTION: u32 = 16;
+
 /// The resolution whose memory fits `budget` bytes for a technique that took `probe[i]`
 /// bytes at [`PROBE_RESOLUTIONS`]`[i]`: memory is taken as fixed bytes plus bytes per texel.
-fn fitting_resolution(probe: [u64; 2], budget: u64) -> u32 {
+/// `None` when not even a [`MIN_RESOLUTION`]² map fits (the technique's fixed buffers, such
+/// as per-pixel ones, take the budget).
+fn fitting_resolution(probe: [u64; 2], budget: u64) -> Option<u32> {
     let [r0, r1] = PROBE_RESOLUTIONS.map(|r| (r as f64).powi(2));
     let per_texel = ((probe[1] as f64 - probe[0] as f64) / (r1 - r0)).max(1e-9);
     let fixed = (probe[0] as f64 - per_texel * r0).max(0.0);
-    (((budget as f64 - fixed).max(0.0) / per_texel)
+    let side = ((budget as f64 - fixed).max(0.0) / per_texel)
         .sqrt()
-        .floor() as u32)
-        .clamp(16, 16384)
+        .floor();
+    (side >= MIN_RESOLUTION as f64).then(|| side.min(16384.0) as u32)
+}
+
+/// The bytes a technique that took `probe` bytes at [`PROBE_RESOLUTIONS`] needs at the
+/// smallest map, for the line that says it does not fit.
+fn smallest_bytes(probe: [u64; 2]) -> f64 {
+    let [r0, r1] = PROBE_RESOLUTIONS.map(|r| (r as f64).powi(2));
+    let per_texel = ((probe[1] as f64 - probe[0] as f64) / (r1 - r0)).max(0.0);
+    (probe[0] as f64 - per_texel * r0).max(0.0) + per_texel * (MIN_RESOLUTION as f64).powi(2)
 }
 
 /// Renders `t` on `frame`: median time of `repeat` runs after an untimed one, the result.
@@ -173,7 +187,16 @@ pub fn run(a: &BenchConfig) -> Result<BenchReport> {
                 if let Some(b) = b {
                     match (key, probe) {
                         (Some("resolution"), Some(p)) => {
-                            let r = fitting_resolution(p, b << 20);
+                            let Some(r) = fitting_resolution(p, b << 20) else {
+                                pb.suspend(|| {
+                                    println!(
+                                        "{tname:>10} {:>7}   does not fit: {:.1}Mi at a {MIN_RESOLUTION}² map",
+                                        format!("{b} MiB"),
+                                        smallest_bytes(p) / (1u64 << 20) as f64
+                                    )
+                                });
+                                continue;
+                            };
                             t.set_param("resolution", &r.to_string())?;
                             res = Some(r);
                         }
@@ -375,11 +398,15 @@ mod tests {
         let bytes =
             |fixed: u64, per: u64| PROBE_RESOLUTIONS.map(|r| fixed + per * (r as u64).pow(2));
         // 4 bytes a texel: a 16 MiB budget is one 2048² map.
-        assert_eq!(fitting_resolution(bytes(0, 4), 16 << 20), 2048);
+        assert_eq!(fitting_resolution(bytes(0, 4), 16 << 20), Some(2048));
         // Fixed buffers come off the budget first.
-        assert_eq!(fitting_resolution(bytes(12 << 20, 4), 16 << 20), 1024);
+        assert_eq!(fitting_resolution(bytes(12 << 20, 4), 16 << 20), Some(1024));
+        // Fixed buffers over the budget leave no map that fits.
+        assert_eq!(fitting_resolution(bytes(20 << 20, 4), 16 << 20), None);
+        let need = smallest_bytes(bytes(20 << 20, 4));
+        assert_eq!(need, (20u64 << 20) as f64 + 4.0 * 256.0);
         // 16 bytes a texel plus a third for mips (as a whole number of bytes per texel, 21).
-        let r = fitting_resolution(bytes(0, 21), 64 << 20) as u64;
+        let r = fitting_resolution(bytes(0, 21), 64 << 20).unwrap() as u64;
         assert!(r * r * 21 <= 64 << 20 && (r + 1) * (r + 1) * 21 > 64 << 20);
     }
 }
