@@ -127,84 +127,104 @@ where
     let chunks: Vec<Vec<SetupTriangle>> = (0..count.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
-            let mut out = Vec::new();
-            let mut a = Vec::with_capacity(12);
-            let mut b = Vec::with_capacity(12);
+            let mut setup = TriangleSetup::new(width, height);
             for i in c * CHUNK..((c + 1) * CHUNK).min(count) {
                 let (clip, d) = fetch(i);
-                setup_one(i as u32, clip, d, width, height, &mut a, &mut b, &mut out);
+                setup.add(i as u32, clip, d);
             }
-            out
+            setup.out
         })
         .collect();
     chunks.concat()
 }
 
-#[allow(clippy::too_many_arguments)]
-fn setup_one(
-    id: u32,
-    clip: [Vec4; 3],
-    d: [f32; 3],
+/// One worker's triangle set-up: the target size, the clipper's two scratch polygons and
+/// the set-up triangles made so far.
+struct TriangleSetup {
     width: u32,
     height: u32,
-    a: &mut Vec<ClipVert>,
-    b: &mut Vec<ClipVert>,
-    out: &mut Vec<SetupTriangle>,
-) {
-    if !clip.iter().all(|c| c.is_finite()) || !d.iter().all(|x| x.is_finite()) {
-        return;
+    a: Vec<ClipVert>,
+    b: Vec<ClipVert>,
+    out: Vec<SetupTriangle>,
+}
+
+impl TriangleSetup {
+    fn new(width: u32, height: u32) -> Self {
+        TriangleSetup {
+            width,
+            height,
+            a: Vec::with_capacity(12),
+            b: Vec::with_capacity(12),
+            out: Vec::new(),
+        }
     }
-    let gx = (GUARD_PIXELS / width as f32).max(1.0);
-    let gy = (GUARD_PIXELS / height as f32).max(1.0);
-    // Trivial reject against each plane; trivial accept when inside all.
-    let planes: [&dyn Fn(Vec4) -> f32; 6] = [
-        &|c: Vec4| c.z,
-        &|c: Vec4| c.w - c.z,
-        &|c: Vec4| c.x + gx * c.w,
-        &|c: Vec4| gx * c.w - c.x,
-        &|c: Vec4| c.y + gy * c.w,
-        &|c: Vec4| gy * c.w - c.y,
-    ];
-    let mut inside_all = true;
-    for p in &planes {
-        let ds = clip.map(p);
-        if ds.iter().all(|&x| x < 0.0) {
+
+    /// Clips triangle `id` (clip-space corners, per-vertex depth attribute) against the
+    /// view volume and its guard band, then sets up each piece of the fan it leaves.
+    fn add(&mut self, id: u32, clip: [Vec4; 3], d: [f32; 3]) {
+        let (width, height) = (self.width, self.height);
+        let (a, b) = (&mut self.a, &mut self.b);
+        if !clip.iter().all(|c| c.is_finite()) || !d.iter().all(|x| x.is_finite()) {
             return;
         }
-        if ds.iter().any(|&x| x < 0.0) {
-            inside_all = false;
-        }
-    }
-    a.clear();
-    for k in 0..3 {
-        a.push(ClipVert {
-            c: clip[k],
-            d: d[k],
-        });
-    }
-    if !inside_all {
+        let gx = (GUARD_PIXELS / width as f32).max(1.0);
+        let gy = (GUARD_PIXELS / height as f32).max(1.0);
+        // Trivial reject against each plane; trivial accept when inside all.
+        let planes: [&dyn Fn(Vec4) -> f32; 6] = [
+            &|c: Vec4| c.z,
+            &|c: Vec4| c.w - c.z,
+            &|c: Vec4| c.x + gx * c.w,
+            &|c: Vec4| gx * c.w - c.x,
+            &|c: Vec4| c.y + gy * c.w,
+            &|c: Vec4| gy * c.w - c.y,
+        ];
+        let mut inside_all = true;
         for p in &planes {
-            clip_polygon(a, b, p);
-            std::mem::swap(a, b);
-            if a.len() < 3 {
+            let ds = clip.map(p);
+            if ds.iter().all(|&x| x < 0.0) {
                 return;
             }
+            if ds.iter().any(|&x| x < 0.0) {
+                inside_all = false;
+            }
         }
-    }
-    // Project and snap every polygon vertex once, then fan-triangulate.
-    let mut verts = [([0i64; 2], 0f32, 0f32); 12];
-    let n = a.len().min(12);
-    for k in 0..n {
-        let v = a[k];
-        let iw = 1.0 / v.c.w;
-        let sx = (v.c.x * iw * 0.5 + 0.5) * width as f32;
-        let sy = (0.5 - v.c.y * iw * 0.5) * height as f32;
-        let fx = (sx * SUBPIXEL).round() as i64;
-        let fy = (sy * SUBPIXEL).round() as i64;
-        verts[k] = ([fx, fy], iw, v.d * iw);
-    }
-    for k in 1..n - 1 {
-        push_triangle(id, [verts[0], verts[k], verts[k + 1]], width, height, out);
+        a.clear();
+        for k in 0..3 {
+            a.push(ClipVert {
+                c: clip[k],
+                d: d[k],
+            });
+        }
+        if !inside_all {
+            for p in &planes {
+                clip_polygon(a, b, p);
+                std::mem::swap(a, b);
+                if a.len() < 3 {
+                    return;
+                }
+            }
+        }
+        // Project and snap every polygon vertex once, then fan-triangulate.
+        let mut verts = [([0i64; 2], 0f32, 0f32); 12];
+        let n = a.len().min(12);
+        for k in 0..n {
+            let v = a[k];
+            let iw = 1.0 / v.c.w;
+            let sx = (v.c.x * iw * 0.5 + 0.5) * width as f32;
+            let sy = (0.5 - v.c.y * iw * 0.5) * height as f32;
+            let fx = (sx * SUBPIXEL).round() as i64;
+            let fy = (sy * SUBPIXEL).round() as i64;
+            verts[k] = ([fx, fy], iw, v.d * iw);
+        }
+        for k in 1..n - 1 {
+            push_triangle(
+                id,
+                [verts[0], verts[k], verts[k + 1]],
+                width,
+                height,
+                &mut self.out,
+            );
+        }
     }
 }
 
