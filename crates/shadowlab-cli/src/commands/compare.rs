@@ -333,4 +333,32 @@ fn print_table(m: &Metrics) {
         "each verdict is against the ray-traced reference at its \"ref spp\" samples per pixel; \
          \"frames\": the frames a progressive technique had on this still view (until converged, at most {MAX_STILL_FRAMES})"
     );
+    if m.frames > 1 {
+        print_sequence(m);
+    }
+}
+
+/// The per-frame verdicts of a sequence: each run's mean error per frame and its temporal
+/// error.
+fn print_sequence(m: &Metrics) {
+    println!(
+        "{} frames, each against its own reference; temporal error: mean |Δ technique − Δ reference| between consecutive frames",
+        m.frames
+    );
+    for run in &m.results {
+        let per_frame: Vec<String> = run
+            .frames
+            .iter()
+            .flatten()
+            .filter_map(|f| f.verdict.map(|v| format!("{:.5}", v.mean_abs_error)))
+            .collect();
+        let temporal = run
+            .temporal_error
+            .map_or_else(|| "—".to_string(), |t| format!("{t:.5}"));
+        println!(
+            "{:<28} temporal {temporal:>8}  mean err per frame {}",
+            run.label,
+            per_frame.join(" ")
+        );
+    }
 }
