@@ -135,6 +135,7 @@ impl Run {
             frame: frame.index,
             time_ms: ms,
             memory_bytes: s.stats.memory_bytes,
+            verdict: None,
         });
         self.last = Some((s, ms));
         Ok(())

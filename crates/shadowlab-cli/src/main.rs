@@ -3,7 +3,8 @@
 //! A run flows from the flags as clap parses them (`args`) to a configuration validated
 //! before any work (`config`) to the command (`commands`, one module per command). Each
 //! module uses only those after it in this list: `commands`, `bench` (the suites),
-//! `report`, `frames` (techniques over the frames of a view), `metrics` (the records
+//! `report`, `sequence` (per-frame references and verdicts of `compare`), `frames`
+//! (techniques over the frames of a view), `metrics` (the records
 //! written), `config`, `args`, `output` (every file written), `charts`, `progress`,
 //! `failure` (exit codes).
 //!
@@ -21,6 +22,7 @@ mod metrics;
 mod output;
 mod progress;
 mod report;
+mod sequence;
 
 use args::{Cli, Command, CompareArgs};
 use clap::Parser;

@@ -79,7 +79,8 @@ impl Figures {
     }
 }
 
-/// One frame of a sequence: its index, the technique's time and memory in it.
+/// One frame of a sequence: its index, the technique's time and memory in it, and in
+/// `compare` its verdict against that frame's own reference.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 pub struct FrameFigures {
     /// Frame index along the camera path.
@@ -88,6 +89,24 @@ pub struct FrameFigures {
     pub time_ms: f64,
     /// The technique's memory in that frame.
     pub memory_bytes: u64,
+    /// In `compare`, the frame measured against its own reference.
+    #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
+    pub verdict: Option<FrameVerdict>,
+}
+
+/// One frame of a sequence measured against the reference traced for that frame.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct FrameVerdict {
+    /// Share of covered pixels whose shadow term differs from the reference by ≥ 0.5.
+    pub mismatch_rate: f64,
+    /// Mean absolute luminance error over covered pixels.
+    pub mean_abs_error: f64,
+    /// Mean |Δ(technique) − Δ(reference)| of the shadow term from the frame before over
+    /// the pixels visible in both (`shadowlab::temporal`); null in the first frame and
+    /// when no pixel is visible in both.
+    pub temporal_error: Option<f64>,
+    /// Pixels visible in this frame and the one before; null in the first frame.
+    pub reprojected_pixels: Option<usize>,
 }
 
 /// A point or direction in world units.
@@ -320,6 +339,13 @@ pub struct RunResult {
     /// With `--frames N > 1`: the GIF of every frame.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub animation: Option<String>,
+    /// With `--frames N > 1`: the mean of the per-frame temporal errors (absent when no
+    /// pixel is visible in two consecutive frames).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temporal_error: Option<f64>,
+    /// With `--frames N > 1`: the GIF of the reference and the technique side by side.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub walkthrough: Option<String>,
     /// With `--sweep`: the swept parameter.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sweep: Option<Sweep>,
@@ -451,6 +477,8 @@ mod tests {
             error_image: "sm.resolution_512-error.png".into(),
             frames: None,
             animation: None,
+            temporal_error: None,
+            walkthrough: None,
             sweep: Some(Sweep {
                 key: "resolution".into(),
                 value: "512".into(),

@@ -218,15 +218,32 @@ pub const ANIMATION_MAX_WIDTH: u32 = 640;
 /// gradients without banding at a few tens of milliseconds per frame.
 const ANIMATION_QUANTIZE_SPEED: i32 = 10;
 
+/// Side-by-side animations (two panels) are scaled down to at most this width.
+pub const ANIMATION_PAIR_MAX_WIDTH: u32 = 960;
+/// White columns between the panels of a side-by-side animation frame.
+const PAIR_GAP: u32 = 8;
+
 /// Writes an animated GIF frame by frame, so a walkthrough never sits in memory.
 pub struct Animation {
     encoder: GifEncoder<BufWriter<File>>,
     path: PathBuf,
+    max_width: u32,
 }
 
 impl Animation {
-    /// Starts an endlessly looping animation at `path`.
+    /// Starts an endlessly looping animation at `path`, its frames scaled down to
+    /// [`ANIMATION_MAX_WIDTH`].
     pub fn create(path: &Path) -> Result<Self> {
+        Self::create_with_width(path, ANIMATION_MAX_WIDTH)
+    }
+
+    /// Starts an endlessly looping animation of two panels side by side (see
+    /// [`Animation::push_pair`]), scaled down to [`ANIMATION_PAIR_MAX_WIDTH`].
+    pub fn create_pair(path: &Path) -> Result<Self> {
+        Self::create_with_width(path, ANIMATION_PAIR_MAX_WIDTH)
+    }
+
+    fn create_with_width(path: &Path, max_width: u32) -> Result<Self> {
         let file =
             File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
         let mut encoder =
@@ -237,17 +254,28 @@ impl Animation {
         Ok(Animation {
             encoder,
             path: path.to_path_buf(),
+            max_width,
         })
     }
 
-    /// Appends one frame, scaled down to [`ANIMATION_MAX_WIDTH`] if wider.
+    /// Appends one frame of two images of one size side by side, `left` and `right`, with
+    /// a white gap between them.
+    pub fn push_pair(&mut self, left: &RgbImage, right: &RgbImage) -> Result<()> {
+        let (w, h) = left.dimensions();
+        let mut both = RgbImage::from_pixel(2 * w + PAIR_GAP, h, image::Rgb([255, 255, 255]));
+        imageops::replace(&mut both, left, 0, 0);
+        imageops::replace(&mut both, right, i64::from(w + PAIR_GAP), 0);
+        self.push(&both)
+    }
+
+    /// Appends one frame, scaled down to the animation's largest width if wider.
     pub fn push(&mut self, img: &RgbImage) -> Result<()> {
-        let rgba = if img.width() > ANIMATION_MAX_WIDTH {
-            let h = ((img.height() as u64 * ANIMATION_MAX_WIDTH as u64) / img.width() as u64).max(1)
-                as u32;
+        let max = self.max_width;
+        let rgba = if img.width() > max {
+            let h = ((img.height() as u64 * max as u64) / img.width() as u64).max(1) as u32;
             image::DynamicImage::ImageRgb8(imageops::resize(
                 img,
-                ANIMATION_MAX_WIDTH,
+                max,
                 h,
                 imageops::FilterType::Triangle,
             ))

@@ -47,6 +47,29 @@ fn files(dir: &Path) -> Vec<String> {
     out
 }
 
+/// Every report of `reports` holds the files of the first, `expected` among them, with
+/// the same bytes, and the same `metrics.json` but for timings.
+fn assert_same_reports(what: &str, reports: &[PathBuf], expected: &[&str]) {
+    let first_files = files(&reports[0]);
+    for f in expected {
+        assert!(first_files.iter().any(|n| n == f), "no {f}");
+    }
+    let first_metrics = without_timings(&metrics(&reports[0]));
+    for (i, r) in reports.iter().enumerate().skip(1) {
+        assert_eq!(first_files, files(r));
+        for f in &first_files {
+            let what = format!("verdict-{what}-{i}-{f}");
+            support::assert_same_files(&what, &reports[0].join(f), &r.join(f));
+        }
+        assert_eq!(
+            first_metrics,
+            without_timings(&metrics(r)),
+            "{}",
+            r.display()
+        );
+    }
+}
+
 #[test]
 fn identical_runs_give_identical_bytes_at_one_and_two_threads() {
     let d = tmp("determinism");
@@ -62,22 +85,7 @@ fn identical_runs_give_identical_bytes_at_one_and_two_threads() {
             .arg(&out));
         reports.push(out);
     }
-    let first_files = files(&reports[0]);
-    assert!(first_files.iter().any(|n| n == "asm.png"));
-    let first_metrics = without_timings(&metrics(&reports[0]));
-    for (i, r) in reports.iter().enumerate().skip(1) {
-        assert_eq!(first_files, files(r));
-        for f in &first_files {
-            let what = format!("verdict-report-{i}-{f}");
-            support::assert_same_files(&what, &reports[0].join(f), &r.join(f));
-        }
-        assert_eq!(
-            first_metrics,
-            without_timings(&metrics(r)),
-            "{}",
-            r.display()
-        );
-    }
+    assert_same_reports("report", &reports, &["asm.png"]);
     for technique in ["asm", "csm", "afsm", "subpixel"] {
         let mut exrs: Vec<PathBuf> = Vec::new();
         for (i, threads) in ["1", "1", "2", "2"].iter().enumerate() {
@@ -193,4 +201,22 @@ fn the_automatic_light_shadows_what_the_camera_sees_and_is_printed() {
             "{mesh}: {shadowed} of the covered pixels in shadow"
         );
     }
+}
+
+#[test]
+fn a_sequence_gives_identical_bytes_at_one_and_two_threads_animations_included() {
+    let d = tmp("sequence");
+    let mut reports = Vec::new();
+    for (i, threads) in ["1", "1", "2"].iter().enumerate() {
+        let out = d.join(format!("sequence-{i}"));
+        run(bin()
+            .args(["--threads", threads, "compare", "--scene", "street"])
+            .args(["--techniques", "sm,asm,pcf,afsm", "--frames", "3"])
+            .args(["--width", "160", "--height", "120"])
+            .arg("--out")
+            .arg(&out));
+        reports.push(out);
+    }
+    let expected = ["sm-walkthrough.gif", "asm.gif", "frames/pcf-0002.png"];
+    assert_same_reports("sequence", &reports, &expected);
 }

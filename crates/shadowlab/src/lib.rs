@@ -68,6 +68,7 @@ pub mod sampling;
 pub mod scene;
 pub mod shade;
 pub mod techniques;
+pub mod temporal;
 pub mod view;
 
 pub use error::{Error, Result};

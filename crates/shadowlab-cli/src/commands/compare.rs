@@ -2,11 +2,11 @@
 //! frame, each measured against the ray-traced reference, written up as a report.
 //!
 //! The flow, one stage per function below: create the report folder; render every frame
-//! with every technique (a still view until the progressive ones converge; a sequence
-//! frame by frame, each frame's image and the animations written as they come); trace the
-//! references on the last frame; measure each run against its reference and write its
-//! images; gather everything into [`Metrics`]; write `metrics.json` and the report from
-//! it; print the terminal table.
+//! with every technique (a still view until the progressive ones converge) and trace its
+//! references (a sequence measures every frame against its own, with the temporal error,
+//! and writes each frame's images and the animations as they come); measure each run's
+//! last frame against its reference and write its images; gather everything into
+//! [`Metrics`]; write `metrics.json` and the report from it; print the terminal table.
 
 use crate::config::{CompareConfig, ReferencePlan, Setup};
 use crate::frames::{Pass, Run, MAX_STILL_FRAMES};
@@ -14,18 +14,17 @@ use crate::metrics::{
     self, CameraRecord, Figures, LightRecord, Metrics, ReferenceImage, ReferenceSummary, RunResult,
     SceneRecord, Sweep,
 };
-use crate::output::{self, slug, Animation};
+use crate::output::{self, slug};
+use crate::sequence::{mean_temporal_error, walkthrough_file, References, Sequence};
 use crate::{progress, report};
 use anyhow::Result;
 use shadowlab::compare::{compare as measure, compare_samples};
-use shadowlab::frame::{DumpDir, DumpSink, Frame, Visibility};
-use shadowlab::math::Vec3;
+use shadowlab::frame::{DumpDir, DumpSink, Visibility};
 use shadowlab::picture::{self, RgbImage};
 use shadowlab::reference::Reference;
 use shadowlab::shade;
 use shadowlab::view::ViewSamples;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 /// Runs `compare`.
 pub fn run(cfg: CompareConfig) -> Result<()> {
@@ -37,9 +36,8 @@ pub fn run(cfg: CompareConfig) -> Result<()> {
         dump,
     } = cfg;
     let mut runs: Vec<Run> = runs.into_iter().map(Run::new).collect();
-    let mut folder = Folder::create(&out, dump, &setup, &runs)?;
-    let pass = render_frames(&setup, &mut runs, &mut folder)?;
-    let traced = trace_references(&setup, &pass, &references);
+    let folder = Folder::create(&out, dump)?;
+    let (pass, traced) = render_frames(&setup, &mut runs, &references, &folder)?;
     let bar = progress::bar(runs.len() as u64 + 1, "writing images");
     let (ref_img, reference_images) = write_references(&setup, &pass, &folder, &traced)?;
     bar.inc(1);
@@ -77,131 +75,78 @@ pub fn run(cfg: CompareConfig) -> Result<()> {
     Ok(())
 }
 
-/// The report folder while the runs fill it: where the techniques dump, and the animation
-/// of each run of a sequence.
+/// The report folder while the runs fill it, and where the techniques dump.
 struct Folder {
     dir: PathBuf,
     dump: Option<DumpDir>,
-    animations: Vec<Animation>,
 }
 
 impl Folder {
-    /// Creates the folder with its marker, the dump folder when asked for, and for a
-    /// sequence `DIR/frames/` and an animated `DIR/<run>.gif` per run.
-    fn create(dir: &Path, dump: bool, setup: &Setup, runs: &[Run]) -> Result<Self> {
+    /// Creates the folder with its marker and the dump folder when asked for.
+    fn create(dir: &Path, dump: bool) -> Result<Self> {
         output::create_report_dir(dir)?;
         let dump = dump.then(|| DumpDir::new(&dir.join("dump")));
         if let Some(d) = &dump {
             output::create_dir(&d.0)?;
         }
-        let mut animations = Vec::new();
-        if setup.frames > 1 {
-            output::create_dir(&dir.join("frames"))?;
-            for run in runs {
-                animations.push(Animation::create(
-                    &dir.join(format!("{}.gif", slug(&run.label))),
-                )?);
-            }
-        }
         Ok(Folder {
             dir: dir.to_path_buf(),
             dump,
-            animations,
         })
     }
 }
 
-/// Renders every frame with every run; a sequence writes `DIR/frames/<run>-NNNN.png` and
-/// each run's animation as it goes. Returns the last frame's camera pass.
-fn render_frames(setup: &Setup, runs: &mut [Run], folder: &mut Folder) -> Result<Pass> {
+/// Renders every frame with every run and traces its references through one BVH; a
+/// sequence measures each frame and writes its images as it goes (see [`Sequence`]).
+/// Returns the last frame's camera pass and references.
+fn render_frames(
+    setup: &Setup,
+    runs: &mut [Run],
+    plan: &ReferencePlan,
+    folder: &Folder,
+) -> Result<(Pass, References)> {
     let frames = setup.frames;
-    let bar = progress::bar((frames * runs.len()) as u64, "techniques");
+    let mut sequence = if frames > 1 {
+        let spps = runs
+            .iter()
+            .map(|r| plan.spp_for(r.technique.name()))
+            .collect();
+        Some(Sequence::create(&folder.dir, runs, spps)?)
+    } else {
+        None
+    };
+    let pb = progress::step("ray-traced reference: BVH");
+    let reference = Reference::build(&setup.scene);
+    pb.finish_and_clear();
+    let spp_text: Vec<String> = plan.spps.iter().map(|n| format!("{n} spp")).collect();
+    let bar = progress::bar((frames * (runs.len() + 1)) as u64, "techniques");
     let mut last = None;
     for i in 0..frames {
         bar.set_message(format!("frame {}/{frames} camera pass", i + 1));
         let pass = Pass::render(setup, i)?;
         let sink = folder.dump.as_ref().map(|d| d as &dyn DumpSink);
         let frame = pass.frame(setup, i, sink);
-        for (r, run) in runs.iter_mut().enumerate() {
+        for run in runs.iter_mut() {
             bar.set_message(format!("frame {}/{frames} {}", i + 1, run.label));
             run.render(&frame, frames == 1)?;
-            if let Some(anim) = folder.animations.get_mut(r) {
-                let img = pass.shade(setup, &run.result().0);
-                let file = format!("frames/{}-{i:04}.png", slug(&run.label));
-                picture::save_png(&img, &folder.dir.join(file))?;
-                anim.push(&img)?;
-            }
             bar.inc(1);
         }
-        last = Some(pass);
+        bar.set_message(format!(
+            "frame {}/{frames} reference ({})",
+            i + 1,
+            spp_text.join(", ")
+        ));
+        let traced = References::trace(&reference, setup, &pass, plan);
+        match &mut sequence {
+            Some(s) => s.frame(setup, i, pass, traced, runs)?,
+            None => last = Some((pass, traced)),
+        }
+        bar.inc(1);
     }
     bar.finish_and_clear();
-    for anim in std::mem::take(&mut folder.animations) {
-        anim.finish()?;
-    }
-    Ok(last.expect("at least one frame"))
-}
-
-/// One traced reference: samples per pixel, the shadow term, the trace time.
-struct Traced {
-    spp: u32,
-    vis: Visibility,
-    ms: f64,
-}
-
-/// The references of the last frame, the most samples first, with the BVH build and
-/// total time and, with `--layers`, the layer samples' shadow terms.
-struct References {
-    each: Vec<Traced>,
-    bvh_ms: f64,
-    total_ms: f64,
-    layers: Option<Vec<Vec3>>,
-}
-
-impl References {
-    /// The reference traced with `spp` samples per pixel.
-    fn with_spp(&self, spp: u32) -> &Visibility {
-        &self
-            .each
-            .iter()
-            .find(|r| r.spp == spp)
-            .expect("every planned reference is traced")
-            .vis
-    }
-}
-
-/// Traces every planned reference on the last frame through one BVH.
-fn trace_references(setup: &Setup, pass: &Pass, plan: &ReferencePlan) -> References {
-    let frame = Frame::new(&setup.scene, &pass.camera, &setup.light, &pass.view);
-    let spp_text: Vec<String> = plan.spps.iter().map(|n| format!("{n} spp")).collect();
-    let pb = progress::step(format!("ray-traced reference ({})", spp_text.join(", ")));
-    let t0 = Instant::now();
-    let reference = Reference::build(&setup.scene);
-    let each = plan
-        .spps
-        .iter()
-        .zip(&plan.samples)
-        .map(|(&spp, samples)| {
-            let t = Instant::now();
-            let vis = reference.visibility(&frame, samples);
-            Traced {
-                spp,
-                vis,
-                ms: t.elapsed().as_secs_f64() * 1e3,
-            }
-        })
-        .collect();
-    let total_ms = t0.elapsed().as_secs_f64() * 1e3;
-    let layers = pass
-        .layers
-        .as_ref()
-        .map(|l| reference.layer_visibility(&frame, l));
-    pb.finish_and_clear();
-    References {
-        each,
-        bvh_ms: reference.build_ms,
-        total_ms,
-        layers,
+    match sequence {
+        Some(s) => s.finish(),
+        None => Ok(last.expect("at least one frame")),
     }
 }
 
@@ -290,6 +235,8 @@ impl Measured<'_> {
             error_image: format!("{file}-error.png"),
             frames: sequence.then(|| run.frames.clone()),
             animation: sequence.then(|| format!("{file}.gif")),
+            temporal_error: mean_temporal_error(run),
+            walkthrough: sequence.then(|| walkthrough_file(&run.label)),
             sweep: swept(technique, &run.label),
             worst_region,
         })
@@ -334,9 +281,9 @@ fn gather(
             technique: "raytrace".to_string(),
             samples_per_pixel: plan.spps[0],
             pattern: plan.pattern.clone(),
-            time_ms: traced.total_ms,
+            time_ms: traced.bvh_ms + traced.trace_ms,
             bvh_build_ms: traced.bvh_ms,
-            trace_ms: traced.total_ms - traced.bvh_ms,
+            trace_ms: traced.trace_ms,
             image: "reference.png".to_string(),
             shadowed_share: shadowed_share(view, &traced.each[0].vis),
         },
@@ -386,4 +333,32 @@ fn print_table(m: &Metrics) {
         "each verdict is against the ray-traced reference at its \"ref spp\" samples per pixel; \
          \"frames\": the frames a progressive technique had on this still view (until converged, at most {MAX_STILL_FRAMES})"
     );
+    if m.frames > 1 {
+        print_sequence(m);
+    }
+}
+
+/// The per-frame verdicts of a sequence: each run's mean error per frame and its temporal
+/// error.
+fn print_sequence(m: &Metrics) {
+    println!(
+        "{} frames, each against its own reference; temporal error: mean |Δ technique − Δ reference| between consecutive frames",
+        m.frames
+    );
+    for run in &m.results {
+        let per_frame: Vec<String> = run
+            .frames
+            .iter()
+            .flatten()
+            .filter_map(|f| f.verdict.map(|v| format!("{:.5}", v.mean_abs_error)))
+            .collect();
+        let temporal = run
+            .temporal_error
+            .map_or_else(|| "—".to_string(), |t| format!("{t:.5}"));
+        println!(
+            "{:<28} temporal {temporal:>8}  mean err per frame {}",
+            run.label,
+            per_frame.join(" ")
+        );
+    }
 }

@@ -157,7 +157,14 @@ impl CompareConfig {
     pub fn from_args(a: &CompareArgs) -> Result<Self> {
         let (runs, references) = plan::plan(a)?;
         output::check_report_dir(&a.out, a.force)?;
-        let setup = load_scene(&a.scene, runs.len() + 1)?;
+        // A sequence keeps the frame before too: each run's shadow term and references.
+        let per_frame = runs.len() + references.spps.len();
+        let kept = if a.scene.frames > 1 {
+            2 * per_frame
+        } else {
+            per_frame
+        };
+        let setup = load_scene(&a.scene, kept)?;
         Ok(CompareConfig {
             runs,
             references,

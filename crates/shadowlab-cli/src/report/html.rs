@@ -7,7 +7,7 @@
 use super::assets::{CSS, SCRIPT};
 use super::dump::Dumped;
 use super::format::{esc, url};
-use super::plots::Plot;
+use super::plots::{Plot, TEMPORAL_ERROR_PLOT};
 use super::rows::reference_samples;
 use super::tables;
 use crate::metrics::Metrics;
@@ -24,7 +24,7 @@ pub fn page(metrics: &Metrics, plots: &[Plot], dumped: &Dumped) -> String {
     plots_section(&mut o, plots);
     images(&mut o, metrics);
     crops(&mut o, metrics);
-    animations(&mut o, metrics);
+    animations(&mut o, metrics, plots);
     dumped.section(&mut o);
     provenance(&mut o, metrics);
     self_test_data(&mut o, metrics);
@@ -238,19 +238,54 @@ fn crops(o: &mut String, m: &Metrics) {
     o.push_str("</div></section>\n");
 }
 
-/// The walkthrough animations of a sequence.
-fn animations(o: &mut String, m: &Metrics) {
+/// The walkthrough of a sequence: each run's animation beside the reference's, its
+/// temporal error in the caption, and the temporal error per frame under them.
+fn animations(o: &mut String, m: &Metrics, plots: &[Plot]) {
     if !has_animation(m) {
         return;
     }
     let frames = m.frames;
-    let _ = write!(o, "<section id=\"animation\"><h2>Walkthrough</h2><p class=\"note\">{frames} frames along the camera path; numbered full-size frames are in <a href=\"frames/\">frames/</a>.</p><div class=\"grid\">");
+    let _ = write!(
+        o,
+        "<section id=\"animation\"><h2>Walkthrough</h2><p class=\"note\">{frames} frames along the camera path, the reference \
+         (left) and each technique (right), every frame judged against its own reference; numbered full-size frames are in \
+         <a href=\"frames/\">frames/</a>. Temporal error: from each frame to the next, the mean |Δ technique − Δ reference| \
+         of the shadow term over the pixels visible in both (reprojected into the frame before), averaged over the frames — \
+         0 when a technique's shadows move as the true ones do, high where they shimmer or swim.</p><div class=\"grid\">"
+    );
     for r in &m.results {
-        if let Some(a) = &r.animation {
-            let _ = write!(o, "<figure><img src=\"{}\" alt=\"{} walkthrough\" style=\"max-width:320px\"><figcaption>{}</figcaption></figure>", esc(&url(a)), esc(&r.label), esc(&r.label));
-        }
+        let Some(a) = r.walkthrough.as_ref().or(r.animation.as_ref()) else {
+            continue;
+        };
+        let temporal = match r.temporal_error {
+            Some(t) => format!(" — temporal error {t:.5}"),
+            None => String::new(),
+        };
+        let single = match &r.animation {
+            Some(s) => format!(" (<a href=\"{}\">alone</a>)", esc(&url(s))),
+            None => String::new(),
+        };
+        let _ = write!(
+            o,
+            "<figure><img src=\"{}\" alt=\"{} walkthrough\" style=\"max-width:640px\"><figcaption>reference | {}{}{}</figcaption></figure>",
+            esc(&url(a)),
+            esc(&r.label),
+            esc(&r.label),
+            esc(&temporal),
+            single
+        );
     }
-    o.push_str("</div></section>\n");
+    o.push_str("</div>");
+    let temporal_file = format!("plots/{TEMPORAL_ERROR_PLOT}.svg");
+    if let Some(p) = plots.iter().find(|p| p.file == temporal_file) {
+        let _ = write!(
+            o,
+            "<figure class=\"temporal\"><img src=\"{0}\" alt=\"{1}\"><figcaption>{1}</figcaption></figure>",
+            esc(&url(&p.file)),
+            esc(&p.caption)
+        );
+    }
+    o.push_str("</section>\n");
 }
 
 /// The resolved camera and light and the scene they belong to.

@@ -3,8 +3,10 @@
 //! `compare` also writes as `metrics.json`: the shaded images side by side, each
 //! technique's error image, a before/after slider between any two images, zoomed crops of
 //! each technique's worst error region, the metrics table, SVG plots (error against time,
-//! error and time against a swept parameter, time per frame), the walkthrough animations
-//! and a gallery of whatever intermediate images the techniques dumped into `DIR/dump`.
+//! error and time against a swept parameter, time, error and temporal error per frame),
+//! the walkthrough animations (reference and technique side by side, the temporal error
+//! plotted under them) and a gallery of whatever intermediate images the techniques
+//! dumped into `DIR/dump`.
 //!
 //! Opened as `index.html?selftest=1`, the page checks itself once loaded — every technique
 //! has a table row, every image decoded, the slider moves — and writes the verdict as JSON

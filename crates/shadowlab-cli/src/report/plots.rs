@@ -1,10 +1,10 @@
 //! The report's plots, as SVG files in `DIR/plots/`: error and mismatch against time (one
-//! point per run), error and time against each swept parameter, and time per frame along
-//! a walkthrough.
+//! point per run), error and time against each swept parameter, and along a walkthrough
+//! time, error against each frame's reference and temporal error per frame.
 
 use super::rows::{sweeps, SweepGroup};
 use crate::charts::{self, Axis, Point, Scale, Series};
-use crate::metrics::RunResult;
+use crate::metrics::{FrameFigures, RunResult};
 use crate::output::{create_dir, slug};
 use anyhow::{Context, Result};
 use std::path::Path;
@@ -33,6 +33,7 @@ pub fn draw(dir: &Path, results: &[RunResult]) -> Result<Vec<Plot>> {
         out.against_sweep(&group)?;
     }
     out.per_frame(results)?;
+    out.frame_errors(results)?;
     Ok(out.plots)
 }
 
@@ -162,17 +163,7 @@ impl Plots<'_> {
 
     /// Time per frame of a walkthrough, one line per run.
     fn per_frame(&mut self, results: &[RunResult]) -> Result<()> {
-        let per_frame: Vec<Series> = results
-            .iter()
-            .filter_map(|r| {
-                let fr = r.frames.as_ref()?;
-                Some(Series {
-                    name: r.label.clone(),
-                    points: fr.iter().map(|x| (x.frame as f64, x.time_ms)).collect(),
-                })
-            })
-            .filter(|s| s.points.len() > 1)
-            .collect();
+        let per_frame = per_frame_series(results, &|f| Some(f.time_ms));
         if per_frame.is_empty() {
             return Ok(());
         }
@@ -195,6 +186,68 @@ impl Plots<'_> {
             &svg,
             "Each technique's frame time along the walkthrough.".into(),
         )
+    }
+}
+
+/// One line per run of a per-frame figure, over the frames that have it; runs with fewer
+/// than two such frames are left out.
+fn per_frame_series(
+    results: &[RunResult],
+    y: &dyn Fn(&FrameFigures) -> Option<f64>,
+) -> Vec<Series> {
+    results
+        .iter()
+        .filter_map(|r| {
+            let fr = r.frames.as_ref()?;
+            Some(Series {
+                name: r.label.clone(),
+                points: fr
+                    .iter()
+                    .filter_map(|f| Some((f.frame as f64, y(f)?)))
+                    .collect(),
+            })
+        })
+        .filter(|s| s.points.len() > 1)
+        .collect()
+}
+
+/// The name of the temporal error plot, `plots/temporal-error.svg` (the walkthrough
+/// section shows it under the animations).
+pub const TEMPORAL_ERROR_PLOT: &str = "temporal-error";
+
+impl Plots<'_> {
+    /// Mean error against each frame's own reference, and temporal error, per frame.
+    fn frame_errors(&mut self, results: &[RunResult]) -> Result<()> {
+        let frame_axis = Axis::linear("frame (index along the camera path)");
+        let errors = per_frame_series(results, &|f| Some(f.verdict?.mean_abs_error));
+        if !errors.is_empty() {
+            let svg = charts::lines(
+                "Error per frame",
+                &frame_axis,
+                &Axis::linear("mean absolute error (fraction, 0–1)"),
+                &errors,
+            )?;
+            self.add(
+                "frame-errors",
+                &svg,
+                "Each technique's mean absolute error against the reference traced for the same frame, along the walkthrough.".into(),
+            )?;
+        }
+        let temporal = per_frame_series(results, &|f| f.verdict?.temporal_error);
+        if !temporal.is_empty() {
+            let svg = charts::lines(
+                "Temporal error per frame",
+                &frame_axis,
+                &Axis::linear("temporal error (fraction, 0–1)"),
+                &temporal,
+            )?;
+            self.add(
+                TEMPORAL_ERROR_PLOT,
+                &svg,
+                "Temporal error: from each frame to the next, mean |Δ technique − Δ reference| of the shadow term over the pixels visible in both; 0 when the shadows move as the true ones do, high where they shimmer.".into(),
+            )?;
+        }
+        Ok(())
     }
 }
 

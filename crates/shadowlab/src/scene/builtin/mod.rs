@@ -99,7 +99,7 @@ const SCENES: &[(&str, &str)] = &[
     ),
     (
         "street",
-        "long street of buildings, lamp posts and cars to the horizon, sun perpendicular to the view (perspective shadow maps, Fig. 9)",
+        "long street of buildings, lamp posts and cars to the horizon, sun perpendicular to the view, with a camera path dollying sideways across it (perspective shadow maps, Fig. 9)",
     ),
 ];
 

@@ -1,19 +1,26 @@
 //! The `street` scene of the perspective shadow map paper's Figure 9 (Stamminger &
 //! Drettakis 2002): a long street of buildings, lamp posts and cars to the horizon, the
 //! sun perpendicular to the view. The paper's cars and aeroplanes move; here everything
-//! stands still (a still frame is what the techniques are compared on).
+//! stands still (a still frame is what the techniques are compared on), and the camera
+//! path (`--frames N`) is a sideways dolly across the street, looking down it: the view's
+//! receivers shift under maps fitted to them, where a uniform or perspective map's texels
+//! swim and its shadow edges shimmer while the true shadows stand still.
 
 use super::params::Params;
 use super::rng::Rng;
 use super::shapes::{add_box, add_cylinder, add_plane};
 use super::{camera, sky_direction};
+use crate::camera::{CameraKey, CameraPath};
 use crate::error::Result;
 use crate::light::Light;
-use crate::math::vec3;
+use crate::math::{vec3, Vec3};
 use crate::scene::{Material, Scene};
 
 /// The longest street `street` makes (metres).
 pub const MAX_STREET_LENGTH: f32 = 20_000.0;
+/// The sideways dolly of the camera path: the eye and the point looked at both move this
+/// far (metres, along +X) from the first key to the last, centred on the still camera.
+const DOLLY_METRES: f32 = 2.0;
 /// Distance between lamp posts along each side of the street (metres).
 const LAMP_SPACING: f32 = 25.0;
 
@@ -139,6 +146,20 @@ pub(super) fn build(p: &Params) -> Result<Scene> {
     s.light = Some(Light::Directional {
         to_light: sky_direction(50.0, 90.0),
     });
-    s.camera = Some(camera(vec3(-2.0, 1.7, 15.0), vec3(-1.5, 1.2, -100.0), 60.0));
+    let (eye, target) = (vec3(-2.0, 1.7, 15.0), vec3(-1.5, 1.2, -100.0));
+    s.camera = Some(camera(eye, target, 60.0));
+    let step = Vec3::X * (DOLLY_METRES * 0.5);
+    s.camera_path = Some(CameraPath {
+        keys: vec![
+            CameraKey {
+                eye: eye - step,
+                target: target - step,
+            },
+            CameraKey {
+                eye: eye + step,
+                target: target + step,
+            },
+        ],
+    });
     Ok(s)
 }
