@@ -1,0 +1,253 @@
+//! `shadowlab view` used as a person uses it: under a virtual X server (Xvfb), a scripted
+//! session switches techniques, turns and flies the camera, drags the light, raises a
+//! parameter and turns the overlays on; each screenshot must equal, outside the overlays'
+//! rectangles, the image of the `render` command line the viewer wrote for it, and the
+//! error it shows must be `compare`'s for that view.
+
+mod support;
+
+use serde_json::Value;
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use support::{quiet, read_json, refused, tmp, Capture};
+
+/// A virtual X server on a display it chose itself, stopped when dropped.
+struct Xvfb {
+    child: Child,
+    display: String,
+}
+
+impl Xvfb {
+    /// Starts Xvfb, or `None` when it is not installed.
+    fn start() -> Option<Xvfb> {
+        let mut child = Command::new("Xvfb")
+            .args([
+                "-displayfd",
+                "1",
+                "-screen",
+                "0",
+                "1024x768x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .ok()?;
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        let n: u32 = line.trim().parse().expect("Xvfb names its display");
+        Some(Xvfb {
+            child,
+            display: format!(":{n}"),
+        })
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// `shadowlab view` in `dir`, without a display unless `display` names one.
+fn view(dir: &Path, display: Option<&str>, args: &[&str]) -> support::Ran {
+    let mut c = quiet();
+    c.current_dir(dir)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY");
+    if let Some(d) = display {
+        c.env("DISPLAY", d);
+    }
+    c.arg("view").args(args).ran()
+}
+
+/// Runs the `render` command line of screenshot `shot` (in `dir`); returns its image.
+fn reproduce(dir: &Path, shot: &Value) -> image::RgbImage {
+    let args: Vec<String> = shot["command"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_str().unwrap().to_string())
+        .collect();
+    let r = quiet().current_dir(dir).args(&args).ran();
+    support::ok(&r);
+    let out = dir.join(shot["render_output"].as_str().unwrap());
+    image::open(out).unwrap().to_rgb8()
+}
+
+/// The screenshot `name` of `dir` and its JSON.
+fn screenshot(dir: &Path, name: &str) -> (image::RgbImage, Value) {
+    let img = image::open(dir.join(format!("{name}.png")))
+        .unwrap()
+        .to_rgb8();
+    (img, read_json(&dir.join(format!("{name}.json"))))
+}
+
+/// Whether pixel (x, y) lies under one of the overlays of `shot`.
+fn covered(shot: &Value, x: u32, y: u32) -> bool {
+    shot["overlays"].as_array().unwrap().iter().any(|r| {
+        let v = |k: &str| r[k].as_u64().unwrap() as u32;
+        x >= v("x0") && x < v("x1") && y >= v("y0") && y < v("y1")
+    })
+}
+
+/// The screenshot equals the rendered image outside the overlays; returns how many
+/// pixels the overlays changed.
+fn assert_same_outside_overlays(
+    what: &str,
+    shot: &image::RgbImage,
+    json: &Value,
+    render: &image::RgbImage,
+) -> usize {
+    assert_eq!(shot.dimensions(), render.dimensions(), "{what}");
+    let mut inside = 0;
+    for (x, y, p) in shot.enumerate_pixels() {
+        if p == render.get_pixel(x, y) {
+            continue;
+        }
+        assert!(
+            covered(json, x, y),
+            "{what}: pixel {x},{y} is {p:?} in the screenshot and {:?} in render's image, outside every overlay",
+            render.get_pixel(x, y)
+        );
+        inside += 1;
+    }
+    inside
+}
+
+fn arg_after<'a>(shot: &'a Value, flag: &str) -> &'a str {
+    let a = shot["command"].as_array().unwrap();
+    let i = a.iter().position(|v| v == flag).unwrap();
+    a[i + 1].as_str().unwrap()
+}
+
+#[test]
+fn a_scripted_session_shows_what_render_draws() {
+    let Some(x) = Xvfb::start() else {
+        eprintln!("skipping the viewer's session: Xvfb is not installed (.ci/run installs it)");
+        return;
+    };
+    let d = tmp("session");
+    std::fs::write(
+        d.join("session.txt"),
+        "key h               # the view alone\n\
+         screenshot hidden.png\n\
+         key h\n\
+         key tab             # sm -> pcf\n\
+         drag left 40 -20    # turn the camera\n\
+         hold w 5            # fly forward\n\
+         drag right 30 10    # turn the light\n\
+         key ]               # resolution 2048 -> 4096\n\
+         wait-reference\n\
+         key m               # the shadow map\n\
+         screenshot shown.png\n",
+    )
+    .unwrap();
+    let size = ["--width", "320", "--height", "240"];
+    let mut args = vec![
+        "--scene",
+        "bunny",
+        "--technique",
+        "sm",
+        "--script",
+        "session.txt",
+    ];
+    args.extend(size);
+    let r = view(&d, Some(&x.display), &args);
+    support::ok(&r);
+
+    // With the overlays off the window is render's image, every pixel.
+    let (hidden, hj) = screenshot(&d, "hidden");
+    assert!(hj["overlays"].as_array().unwrap().is_empty());
+    assert_eq!(
+        hidden,
+        reproduce(&d, &hj),
+        "the screenshot without overlays"
+    );
+
+    // After the session: another technique, parameter, camera and light.
+    let (shown, sj) = screenshot(&d, "shown");
+    assert_eq!(arg_after(&sj, "--technique"), "pcf");
+    assert_eq!(arg_after(&sj, "--param"), "resolution=4096");
+    assert_ne!(arg_after(&sj, "--camera"), arg_after(&hj, "--camera"));
+    assert_ne!(arg_after(&sj, "--light"), arg_after(&hj, "--light"));
+    let names: Vec<&str> = sj["overlays"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["panel", "error", "dump"]);
+    let changed =
+        assert_same_outside_overlays("the session's screenshot", &shown, &sj, &reproduce(&d, &sj));
+    assert!(changed > 0, "the overlays are drawn");
+
+    // The error it shows is compare's against the same reference.
+    let out = d.join("report");
+    let mut c = quiet();
+    c.current_dir(&d)
+        .args(["compare", "--scene", "bunny", "--techniques", "pcf"]);
+    c.args(size);
+    c.args([
+        "--camera",
+        arg_after(&sj, "--camera"),
+        "--light",
+        arg_after(&sj, "--light"),
+    ]);
+    c.args(["--param", "pcf.resolution=4096", "--out"])
+        .arg(&out);
+    support::ok(&c.ran());
+    let m = support::metrics(&out);
+    let result = &m["results"][0];
+    let shown_error = &sj["error"];
+    assert_eq!(shown_error["reference_spp"], 16);
+    for k in ["mismatch_rate", "mean_abs_error"] {
+        let (a, b) = (
+            shown_error[k].as_f64().unwrap(),
+            result[k].as_f64().unwrap(),
+        );
+        assert!(
+            (a - b).abs() <= 1e-9 * b.abs().max(1.0),
+            "{k}: viewer {a}, compare {b}"
+        );
+    }
+}
+
+#[test]
+fn without_a_display_view_says_so() {
+    let d = tmp("nodisplay");
+    let r = view(
+        &d,
+        None,
+        &["--scene", "bunny", "--width", "64", "--height", "48"],
+    );
+    refused(&r, &["display", "xvfb-run"]);
+}
+
+#[test]
+fn a_bad_script_is_refused_before_any_window() {
+    let d = tmp("badscript");
+    std::fs::write(d.join("s.txt"), "key tab\nkey f13\n").unwrap();
+    let r = view(
+        &d,
+        None,
+        &[
+            "--scene", "bunny", "--width", "64", "--height", "48", "--script", "s.txt",
+        ],
+    );
+    refused(&r, &["s.txt", "line 2", "f13"]);
+    std::fs::write(d.join("s.txt"), "screenshot s.txt\n").unwrap();
+    let r = view(
+        &d,
+        None,
+        &[
+            "--scene", "bunny", "--width", "64", "--height", "48", "--script", "s.txt",
+        ],
+    );
+    refused(&r, &["s.txt"]);
+}
