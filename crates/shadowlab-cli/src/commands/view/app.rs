@@ -239,7 +239,8 @@ impl<'a> App<'a> {
             }
             Driver::Script(_) => self.play(event_loop),
             Driver::Benchmark { left, .. } => {
-                self.session.dirty = true;
+                // Every frame a new view, as while the camera turns: 0.2° to the right.
+                self.session.drag(Drag::Look, 1.0, 0.0);
                 *left -= 1;
                 true
             }
@@ -299,6 +300,7 @@ impl<'a> App<'a> {
             s.scene_args.layers,
             s.technique.as_mut(),
             dump,
+            self.drawn.take(),
         );
         s.dirty = false;
         s.stale = true;

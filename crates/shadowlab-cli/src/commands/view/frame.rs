@@ -20,6 +20,8 @@ pub struct Drawn {
     pub camera: Camera,
     /// The camera pass.
     pub view: ViewSamples,
+    /// The surfaces behind semi-transparent ones, when shaded.
+    pub layers: Option<ViewLayers>,
     /// The technique's result.
     pub shadows: Shadows,
     /// The shaded image.
@@ -31,7 +33,9 @@ pub struct Drawn {
 }
 
 /// Draws the frame of `camera` and `light` with `technique`; `layers` shades the surfaces
-/// behind semi-transparent ones too, `dump` keeps the technique's images.
+/// behind semi-transparent ones too, `dump` keeps the technique's images. The camera
+/// pass of `previous` is kept when its camera is the same (the light or the technique
+/// changed): it depends on nothing else.
 pub fn draw(
     scene: &Scene,
     camera: &Camera,
@@ -39,19 +43,30 @@ pub fn draw(
     layers: bool,
     technique: &mut dyn ShadowTechnique,
     dump: bool,
+    previous: Option<Drawn>,
 ) -> Result<Drawn> {
     let mut camera = *camera;
     camera.fit_depth_range(&scene.bounds);
     camera.validate()?;
     let mut stages_ms = Vec::new();
-    let t0 = Instant::now();
-    let view = ViewSamples::try_render(scene, &camera)?;
-    let layer_samples = if layers {
-        Some(ViewLayers::render(scene, &camera, &view)?)
-    } else {
-        None
+    let kept = previous.filter(|p| p.camera == camera && p.layers.is_some() == layers);
+    let (view, layer_samples) = match kept {
+        Some(p) => {
+            stages_ms.push(("camera pass (kept)".to_string(), 0.0));
+            (p.view, p.layers)
+        }
+        None => {
+            let t0 = Instant::now();
+            let view = ViewSamples::try_render(scene, &camera)?;
+            let l = if layers {
+                Some(ViewLayers::render(scene, &camera, &view)?)
+            } else {
+                None
+            };
+            stages_ms.push(("camera pass".to_string(), ms(t0)));
+            (view, l)
+        }
     };
-    stages_ms.push(("camera pass".to_string(), ms(t0)));
     let sink = DumpMemory::default();
     let mut frame = Frame::new(scene, &camera, light, &view);
     if let Some(l) = &layer_samples {
@@ -88,6 +103,7 @@ pub fn draw(
     Ok(Drawn {
         camera,
         view,
+        layers: layer_samples,
         shadows,
         image,
         stages_ms,

@@ -47,6 +47,7 @@ pub fn run(cfg: ViewConfig) -> Result<()> {
         },
         (None, None) => Driver::Person,
     };
+    keep_freed_memory();
     let event_loop = open_display()?;
     event_loop.set_control_flow(ControlFlow::Wait);
     let proxy = event_loop.create_proxy();
@@ -92,6 +93,28 @@ fn open_display() -> Result<EventLoop<ReferenceReady>> {
             ))
         })
 }
+
+/// Frames allocate and free the same large buffers again and again (the camera pass, a
+/// technique's maps). glibc hands blocks past its thresholds back to the kernel when they
+/// are freed, and the kernel zeroes their pages again on the next frame's first touch: a
+/// third of `sm`'s frame time went there. The viewer keeps freed memory for the next frame
+/// instead; it stays at the largest frame's working set.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn keep_freed_memory() {
+    // glibc's largest mmap threshold (DEFAULT_MMAP_THRESHOLD_MAX on 64-bit targets).
+    let mmap_max = (4 * 1024 * 1024 * std::mem::size_of::<libc::c_long>()) as libc::c_int;
+    // SAFETY: mallopt only sets glibc's allocation thresholds and is thread-safe; a value
+    // it refuses leaves the default in place.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, mmap_max);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 1 << 30);
+        libc::mallopt(libc::M_TOP_PAD, 64 << 20);
+    }
+}
+
+/// Elsewhere the allocator's defaults stay.
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn keep_freed_memory() {}
 
 /// The script steps, for the driver.
 pub type Steps = VecDeque<script::Step>;
