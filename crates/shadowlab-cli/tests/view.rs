@@ -251,3 +251,119 @@ fn a_bad_script_is_refused_before_any_window() {
     );
     refused(&r, &["s.txt"]);
 }
+
+/// Runs xdotool on the display of `x`; returns what it printed.
+fn xdotool(x: &Xvfb, args: &[&str]) -> String {
+    let out = Command::new("xdotool")
+        .env("DISPLAY", &x.display)
+        .args(args)
+        .output()
+        .expect("xdotool runs");
+    assert!(
+        out.status.success(),
+        "xdotool {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).trim().to_string()
+}
+
+/// Waits (at most a minute) until `p` exists.
+fn wait_for(p: &Path, child: &mut Child) {
+    let t0 = std::time::Instant::now();
+    while !p.exists() {
+        if let Some(s) = child.try_wait().unwrap() {
+            panic!("the viewer ended ({s}) before writing {}", p.display());
+        }
+        assert!(
+            t0.elapsed().as_secs() < 60,
+            "no {} after a minute",
+            p.display()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+}
+
+#[test]
+fn a_person_at_the_keyboard_and_mouse_is_answered() {
+    let Some(x) = Xvfb::start() else {
+        eprintln!("skipping the viewer's person test: Xvfb is not installed (.ci/run installs it)");
+        return;
+    };
+    if Command::new("xdotool").arg("version").output().is_err() {
+        eprintln!(
+            "skipping the viewer's person test: xdotool is not installed (.ci/run installs it)"
+        );
+        return;
+    }
+    let d = tmp("person");
+    let mut child = quiet()
+        .current_dir(&d)
+        .env("DISPLAY", &x.display)
+        .args([
+            "view",
+            "--scene",
+            "bunny",
+            "--technique",
+            "sm",
+            "--width",
+            "320",
+            "--height",
+            "240",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let id = xdotool(&x, &["search", "--sync", "--name", "shadowlab view"]);
+    let id = id.lines().next().unwrap().to_string();
+    // The window gets the keyboard (there is no window manager to give it), the pointer
+    // goes over it; P photographs the start.
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    xdotool(&x, &["mousemove", "--window", &id, "100", "100"]);
+    xdotool(&x, &["key", "p"]);
+    let first = d.join("shadowlab-view-0001.json");
+    wait_for(&first, &mut child);
+    // Tab: the next technique; a left drag turns the camera, a right one the light;
+    // ] doubles the resolution; P again; Escape quits.
+    xdotool(&x, &["key", "Tab"]);
+    xdotool(
+        &x,
+        &[
+            "mousedown",
+            "1",
+            "mousemove",
+            "--window",
+            &id,
+            "140",
+            "90",
+            "mouseup",
+            "1",
+        ],
+    );
+    xdotool(
+        &x,
+        &[
+            "mousedown",
+            "3",
+            "mousemove",
+            "--window",
+            &id,
+            "120",
+            "110",
+            "mouseup",
+            "3",
+        ],
+    );
+    xdotool(&x, &["key", "bracketright", "p", "Escape"]);
+    let status = child.wait().unwrap();
+    assert!(status.success(), "the viewer ended with {status}");
+
+    let (_, start) = screenshot(&d, "shadowlab-view-0001");
+    let (after, aj) = screenshot(&d, "shadowlab-view-0002");
+    assert_eq!(arg_after(&start, "--technique"), "sm");
+    assert_eq!(arg_after(&aj, "--technique"), "pcf");
+    assert_eq!(arg_after(&aj, "--param"), "resolution=4096");
+    assert_ne!(arg_after(&aj, "--camera"), arg_after(&start, "--camera"));
+    assert_ne!(arg_after(&aj, "--light"), arg_after(&start, "--light"));
+    assert_same_outside_overlays("a person's screenshot", &after, &aj, &reproduce(&d, &aj));
+}
