@@ -227,6 +227,13 @@ fn without_a_display_view_says_so() {
         &["--scene", "bunny", "--width", "64", "--height", "48"],
     );
     refused(&r, &["display", "xvfb-run"]);
+    // A display that does not answer.
+    let r = view(
+        &d,
+        Some(":4095"),
+        &["--scene", "bunny", "--width", "64", "--height", "48"],
+    );
+    refused(&r, &["\":4095\"", "xvfb-run"]);
 }
 
 #[test]

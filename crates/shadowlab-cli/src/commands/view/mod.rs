@@ -88,8 +88,12 @@ fn open_display() -> Result<EventLoop<ReferenceReady>> {
     EventLoop::<ReferenceReady>::with_user_event()
         .build()
         .map_err(|e| {
+            // winit's text starts with its own source location; the reason is the last part.
+            let text = e.to_string();
+            let reason = text.rsplit(": ").next().unwrap_or(&text).to_string();
+            let display = std::env::var("DISPLAY").unwrap_or_default();
             bad_input(format!(
-                "view cannot open a window on the display ({e}); on a machine without one, run it under xvfb-run"
+                "view cannot open a window on display {display:?} ({reason}); on a machine without one, run it under xvfb-run"
             ))
         })
 }
