@@ -121,6 +121,11 @@ impl<'a> App<'a> {
         }
         match event {
             WindowEvent::ModifiersChanged(m) => self.shift = m.state().shift_key(),
+            // Keys released while the window had no keyboard never say so.
+            WindowEvent::Focused(false) => {
+                self.session.held.clear();
+                self.mouse.0 = None;
+            }
             WindowEvent::KeyboardInput { event, .. } => {
                 let Some(k) = Key::from_winit(&event.logical_key, self.shift) else {
                     return;
