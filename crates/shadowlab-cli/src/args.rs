@@ -37,6 +37,10 @@ pub enum Command {
     Techniques(TechniquesArgs),
     /// Run a benchmark suite that reproduces a paper's table.
     Bench(BenchArgs),
+    /// Open a window showing the scene shaded by a technique: fly the camera, drag the
+    /// light, switch techniques, see the error against the reference and the technique's
+    /// own images.
+    View(ViewArgs),
 }
 
 /// The scene-related flags `render` and `compare` share.
@@ -191,4 +195,30 @@ pub struct BenchArgs {
     /// Runs per measurement (the median is reported).
     #[arg(long, default_value_t = 3)]
     pub repeat: usize,
+}
+
+/// `shadowlab view`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ViewArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// The technique shown first (Tab and Shift+Tab switch).
+    #[arg(long, default_value = "afsm")]
+    pub technique: String,
+    /// A parameter of the first technique, e.g. `resolution=2048`.
+    #[arg(long = "param", value_name = "K=V")]
+    pub params: Vec<String>,
+    /// Play the key and mouse events of this file instead of waiting for a person, then
+    /// quit (the line format is in docs/CLI.md).
+    #[arg(long, value_name = "FILE")]
+    pub script: Option<PathBuf>,
+    /// Render this many frames, each from scratch, print the time per stage and quit.
+    #[arg(long = "benchmark-frames", value_name = "N")]
+    pub benchmark_frames: Option<usize>,
+    /// The folder the screenshot key (P) writes into.
+    #[arg(long = "screenshot-dir", value_name = "DIR", default_value = ".")]
+    pub screenshot_dir: PathBuf,
+    /// Let a script's screenshots replace existing files.
+    #[arg(long)]
+    pub force: bool,
 }

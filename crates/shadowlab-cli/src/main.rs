@@ -66,6 +66,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             commands::techniques::run(config::TechniquesConfig::from_args(&a)?)
         }
         Some(Command::Bench(a)) => commands::bench::run(config::BenchConfig::from_args(&a)?),
+        Some(Command::View(a)) => commands::view::run(config::ViewConfig::from_args(&a)?),
     }
 }
 

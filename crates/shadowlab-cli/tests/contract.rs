@@ -138,6 +138,11 @@ fn every_flag_is_documented_and_every_documented_flag_exists() {
         &documented_flags(&[global, scene, "### `compare`"]),
     );
     assert_same(
+        "view",
+        &parser_flags("view"),
+        &documented_flags(&[global, scene, "### `view`"]),
+    );
+    assert_same(
         "bench",
         &parser_flags("bench"),
         &documented_flags(&[global, "### `bench`"]),

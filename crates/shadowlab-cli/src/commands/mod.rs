@@ -6,3 +6,4 @@ pub mod compare;
 pub mod render;
 pub mod scenes;
 pub mod techniques;
+pub mod view;

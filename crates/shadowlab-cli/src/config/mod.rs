@@ -10,9 +10,11 @@
 pub mod parse;
 pub mod plan;
 pub mod scene;
+pub mod view;
 
 pub use plan::{ReferencePlan, RunPlan};
 pub use scene::Setup;
+pub use view::ViewConfig;
 
 use crate::args::{BenchArgs, CompareArgs, RenderArgs, TechniquesArgs};
 use crate::failure::bad_input;

@@ -1,0 +1,376 @@
+//! `shadowlab view` used as a person uses it: under a virtual X server (Xvfb), a scripted
+//! session switches techniques, turns and flies the camera, drags the light, raises a
+//! parameter and turns the overlays on; each screenshot must equal, outside the overlays'
+//! rectangles, the image of the `render` command line the viewer wrote for it, and the
+//! error it shows must be `compare`'s for that view.
+
+mod support;
+
+use serde_json::Value;
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use support::{quiet, read_json, refused, tmp, Capture};
+
+/// A virtual X server on a display it chose itself, stopped when dropped.
+struct Xvfb {
+    child: Child,
+    display: String,
+}
+
+impl Xvfb {
+    /// Starts Xvfb, or `None` when it is not installed.
+    fn start() -> Option<Xvfb> {
+        let mut child = Command::new("Xvfb")
+            .args([
+                "-displayfd",
+                "1",
+                "-screen",
+                "0",
+                "1024x768x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .ok()?;
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        let n: u32 = line.trim().parse().expect("Xvfb names its display");
+        Some(Xvfb {
+            child,
+            display: format!(":{n}"),
+        })
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// `shadowlab view` in `dir`, without a display unless `display` names one.
+fn view(dir: &Path, display: Option<&str>, args: &[&str]) -> support::Ran {
+    let mut c = quiet();
+    c.current_dir(dir)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY");
+    if let Some(d) = display {
+        c.env("DISPLAY", d);
+    }
+    c.arg("view").args(args).ran()
+}
+
+/// Runs the `render` command line of screenshot `shot` (in `dir`); returns its image.
+fn reproduce(dir: &Path, shot: &Value) -> image::RgbImage {
+    let args: Vec<String> = shot["command"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_str().unwrap().to_string())
+        .collect();
+    let r = quiet().current_dir(dir).args(&args).ran();
+    support::ok(&r);
+    let out = dir.join(shot["render_output"].as_str().unwrap());
+    image::open(out).unwrap().to_rgb8()
+}
+
+/// The screenshot `name` of `dir` and its JSON.
+fn screenshot(dir: &Path, name: &str) -> (image::RgbImage, Value) {
+    let img = image::open(dir.join(format!("{name}.png")))
+        .unwrap()
+        .to_rgb8();
+    (img, read_json(&dir.join(format!("{name}.json"))))
+}
+
+/// Whether pixel (x, y) lies under one of the overlays of `shot`.
+fn covered(shot: &Value, x: u32, y: u32) -> bool {
+    shot["overlays"].as_array().unwrap().iter().any(|r| {
+        let v = |k: &str| r[k].as_u64().unwrap() as u32;
+        x >= v("x0") && x < v("x1") && y >= v("y0") && y < v("y1")
+    })
+}
+
+/// The screenshot equals the rendered image outside the overlays; returns how many
+/// pixels the overlays changed.
+fn assert_same_outside_overlays(
+    what: &str,
+    shot: &image::RgbImage,
+    json: &Value,
+    render: &image::RgbImage,
+) -> usize {
+    assert_eq!(shot.dimensions(), render.dimensions(), "{what}");
+    let mut inside = 0;
+    for (x, y, p) in shot.enumerate_pixels() {
+        if p == render.get_pixel(x, y) {
+            continue;
+        }
+        assert!(
+            covered(json, x, y),
+            "{what}: pixel {x},{y} is {p:?} in the screenshot and {:?} in render's image, outside every overlay",
+            render.get_pixel(x, y)
+        );
+        inside += 1;
+    }
+    inside
+}
+
+fn arg_after<'a>(shot: &'a Value, flag: &str) -> &'a str {
+    let a = shot["command"].as_array().unwrap();
+    let i = a.iter().position(|v| v == flag).unwrap();
+    a[i + 1].as_str().unwrap()
+}
+
+#[test]
+fn a_scripted_session_shows_what_render_draws() {
+    let Some(x) = Xvfb::start() else {
+        eprintln!("skipping the viewer's session: Xvfb is not installed (.ci/run installs it)");
+        return;
+    };
+    let d = tmp("session");
+    std::fs::write(
+        d.join("session.txt"),
+        "key h               # the view alone\n\
+         screenshot hidden.png\n\
+         key h\n\
+         key tab             # sm -> pcf\n\
+         drag left 40 -20    # turn the camera\n\
+         hold w 5            # fly forward\n\
+         drag right 30 10    # turn the light\n\
+         key ]               # resolution 2048 -> 4096\n\
+         wait-reference\n\
+         key m               # the shadow map\n\
+         screenshot shown.png\n",
+    )
+    .unwrap();
+    let size = ["--width", "320", "--height", "240"];
+    let mut args = vec![
+        "--scene",
+        "bunny",
+        "--technique",
+        "sm",
+        "--script",
+        "session.txt",
+    ];
+    args.extend(size);
+    let r = view(&d, Some(&x.display), &args);
+    support::ok(&r);
+
+    // With the overlays off the window is render's image, every pixel.
+    let (hidden, hj) = screenshot(&d, "hidden");
+    assert!(hj["overlays"].as_array().unwrap().is_empty());
+    assert_eq!(
+        hidden,
+        reproduce(&d, &hj),
+        "the screenshot without overlays"
+    );
+
+    // After the session: another technique, parameter, camera and light.
+    let (shown, sj) = screenshot(&d, "shown");
+    assert_eq!(arg_after(&sj, "--technique"), "pcf");
+    assert_eq!(arg_after(&sj, "--param"), "resolution=4096");
+    assert_ne!(arg_after(&sj, "--camera"), arg_after(&hj, "--camera"));
+    assert_ne!(arg_after(&sj, "--light"), arg_after(&hj, "--light"));
+    let names: Vec<&str> = sj["overlays"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["panel", "error", "dump"]);
+    let changed =
+        assert_same_outside_overlays("the session's screenshot", &shown, &sj, &reproduce(&d, &sj));
+    assert!(changed > 0, "the overlays are drawn");
+
+    // The error it shows is compare's against the same reference.
+    let out = d.join("report");
+    let mut c = quiet();
+    c.current_dir(&d)
+        .args(["compare", "--scene", "bunny", "--techniques", "pcf"]);
+    c.args(size);
+    c.args([
+        "--camera",
+        arg_after(&sj, "--camera"),
+        "--light",
+        arg_after(&sj, "--light"),
+    ]);
+    c.args(["--param", "pcf.resolution=4096", "--out"])
+        .arg(&out);
+    support::ok(&c.ran());
+    let m = support::metrics(&out);
+    let result = &m["results"][0];
+    let shown_error = &sj["error"];
+    assert_eq!(shown_error["reference_spp"], 16);
+    for k in ["mismatch_rate", "mean_abs_error"] {
+        let (a, b) = (
+            shown_error[k].as_f64().unwrap(),
+            result[k].as_f64().unwrap(),
+        );
+        assert!(
+            (a - b).abs() <= 1e-9 * b.abs().max(1.0),
+            "{k}: viewer {a}, compare {b}"
+        );
+    }
+}
+
+#[test]
+fn without_a_display_view_says_so() {
+    let d = tmp("nodisplay");
+    let r = view(
+        &d,
+        None,
+        &["--scene", "bunny", "--width", "64", "--height", "48"],
+    );
+    refused(&r, &["display", "xvfb-run"]);
+    // A display that does not answer.
+    let r = view(
+        &d,
+        Some(":4095"),
+        &["--scene", "bunny", "--width", "64", "--height", "48"],
+    );
+    refused(&r, &["\":4095\"", "xvfb-run"]);
+}
+
+#[test]
+fn a_bad_script_is_refused_before_any_window() {
+    let d = tmp("badscript");
+    std::fs::write(d.join("s.txt"), "key tab\nkey f13\n").unwrap();
+    let r = view(
+        &d,
+        None,
+        &[
+            "--scene", "bunny", "--width", "64", "--height", "48", "--script", "s.txt",
+        ],
+    );
+    refused(&r, &["s.txt", "line 2", "f13"]);
+    std::fs::write(d.join("s.txt"), "screenshot s.txt\n").unwrap();
+    let r = view(
+        &d,
+        None,
+        &[
+            "--scene", "bunny", "--width", "64", "--height", "48", "--script", "s.txt",
+        ],
+    );
+    refused(&r, &["s.txt"]);
+}
+
+/// Runs xdotool on the display of `x`; returns what it printed.
+fn xdotool(x: &Xvfb, args: &[&str]) -> String {
+    let out = Command::new("xdotool")
+        .env("DISPLAY", &x.display)
+        .args(args)
+        .output()
+        .expect("xdotool runs");
+    assert!(
+        out.status.success(),
+        "xdotool {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).trim().to_string()
+}
+
+/// Waits (at most a minute) until `p` exists.
+fn wait_for(p: &Path, child: &mut Child) {
+    let t0 = std::time::Instant::now();
+    while !p.exists() {
+        if let Some(s) = child.try_wait().unwrap() {
+            panic!("the viewer ended ({s}) before writing {}", p.display());
+        }
+        assert!(
+            t0.elapsed().as_secs() < 60,
+            "no {} after a minute",
+            p.display()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+}
+
+#[test]
+fn a_person_at_the_keyboard_and_mouse_is_answered() {
+    let Some(x) = Xvfb::start() else {
+        eprintln!("skipping the viewer's person test: Xvfb is not installed (.ci/run installs it)");
+        return;
+    };
+    if Command::new("xdotool").arg("version").output().is_err() {
+        eprintln!(
+            "skipping the viewer's person test: xdotool is not installed (.ci/run installs it)"
+        );
+        return;
+    }
+    let d = tmp("person");
+    let mut child = quiet()
+        .current_dir(&d)
+        .env("DISPLAY", &x.display)
+        .args([
+            "view",
+            "--scene",
+            "bunny",
+            "--technique",
+            "sm",
+            "--width",
+            "320",
+            "--height",
+            "240",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let id = xdotool(&x, &["search", "--sync", "--name", "shadowlab view"]);
+    let id = id.lines().next().unwrap().to_string();
+    // The window gets the keyboard (there is no window manager to give it), the pointer
+    // goes over it; P photographs the start.
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    xdotool(&x, &["mousemove", "--window", &id, "100", "100"]);
+    xdotool(&x, &["key", "p"]);
+    let first = d.join("shadowlab-view-0001.json");
+    wait_for(&first, &mut child);
+    // Tab: the next technique; a left drag turns the camera, a right one the light;
+    // ] doubles the resolution; P again; Escape quits.
+    xdotool(&x, &["key", "Tab"]);
+    xdotool(
+        &x,
+        &[
+            "mousedown",
+            "1",
+            "mousemove",
+            "--window",
+            &id,
+            "140",
+            "90",
+            "mouseup",
+            "1",
+        ],
+    );
+    xdotool(
+        &x,
+        &[
+            "mousedown",
+            "3",
+            "mousemove",
+            "--window",
+            &id,
+            "120",
+            "110",
+            "mouseup",
+            "3",
+        ],
+    );
+    xdotool(&x, &["key", "bracketright", "p", "Escape"]);
+    let status = child.wait().unwrap();
+    assert!(status.success(), "the viewer ended with {status}");
+
+    let (_, start) = screenshot(&d, "shadowlab-view-0001");
+    let (after, aj) = screenshot(&d, "shadowlab-view-0002");
+    assert_eq!(arg_after(&start, "--technique"), "sm");
+    assert_eq!(arg_after(&aj, "--technique"), "pcf");
+    assert_eq!(arg_after(&aj, "--param"), "resolution=4096");
+    assert_ne!(arg_after(&aj, "--camera"), arg_after(&start, "--camera"));
+    assert_ne!(arg_after(&aj, "--light"), arg_after(&start, "--light"));
+    assert_same_outside_overlays("a person's screenshot", &after, &aj, &reproduce(&d, &aj));
+}
