@@ -119,6 +119,22 @@ impl Channel for Unorm16 {
     fn decode_signed(raw: f32) -> f32 {
         raw / (UNORM16_MAX * 0.5) - 1.0
     }
+
+    /// The 2×2 mip reduction in integers: `from_f32(sum · 0.25)` rounds half up, and for
+    /// sums of four codes (exact in f32) that is `(sum + 2) >> 2`, the same code.
+    #[inline]
+    fn reduce_row_2x2<const N: usize>(r0: &[Self], r1: &[Self], out: &mut [Self], ch: usize) {
+        // The channel count: `N` when known at compile time (so the loop unrolls).
+        let ch = if N > 0 { N } else { ch };
+        for (x, texel) in out.chunks_exact_mut(ch).enumerate() {
+            let i = 2 * x * ch;
+            let (a, b) = (&r0[i..i + 2 * ch], &r1[i..i + 2 * ch]);
+            for c in 0..ch {
+                let sum = a[c].0 as u32 + a[ch + c].0 as u32 + b[c].0 as u32 + b[ch + c].0 as u32;
+                texel[c] = Unorm16(((sum + 2) >> 2) as u16);
+            }
+        }
+    }
 }
 
 /// The grey of a dumped map texel whose value is `v` (clamped to `[0, 1]`, white = 1).
@@ -150,5 +166,23 @@ mod tests {
         let v = 0.3f32;
         let code = Unorm16::from_f32(Unorm16::encode_signed(v)).to_f32();
         assert!((Unorm16::decode_signed(code) - v).abs() < 2.0 / UNORM16_MAX);
+    }
+
+    #[test]
+    fn unorm16_mip_reduction_equals_the_float_one() {
+        let mut rng = crate::math::TestRng(3);
+        let mut code = || Unorm16((rng.next() * 65535.99) as u16);
+        let r0: Vec<Unorm16> = (0..64).map(|_| code()).chain([Unorm16(65535); 8]).collect();
+        let r1: Vec<Unorm16> = (0..64).map(|_| code()).chain([Unorm16(65534); 8]).collect();
+        let mut fast = vec![Unorm16(0); 36];
+        Unorm16::reduce_row_2x2::<4>(&r0, &r1, &mut fast, 4);
+        for (x, texel) in fast.chunks_exact(4).enumerate() {
+            for (c, t) in texel.iter().enumerate() {
+                let i = 8 * x + c;
+                let sum = [r0[i], r0[i + 4], r1[i], r1[i + 4]].map(|v| v.to_f32());
+                let float = Unorm16::from_f32((sum[0] + sum[1] + sum[2] + sum[3]) * 0.25);
+                assert_eq!(*t, float, "texel {x} channel {c}");
+            }
+        }
     }
 }
