@@ -140,7 +140,10 @@ pub fn render_depth_map(scene: &Scene, view: &LightView, res: u32) -> DepthBuffe
             t.map(|p| -lv.transform_point3(p).z),
         )
     });
-    raster::depth_buffer(&setups, res, res)
+    let masked = scene.has_alpha_masks();
+    raster::depth_buffer_where(&setups, res, res, |f| {
+        !masked || !scene.cut_out(f.id as usize, f.bary)
+    })
 }
 
 /// The views and maps of `light` for this frame, fitted to the visible receivers.
