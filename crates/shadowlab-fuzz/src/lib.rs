@@ -103,6 +103,7 @@ pub fn pipeline(data: &[u8]) {
         name: "glass".into(),
         color: Vec3::ONE,
         transmittance: vec3(0.5, 0.7, 0.9),
+        alpha_mask: None,
     });
     // Always a floor, so there is something to receive shadows.
     s.push(

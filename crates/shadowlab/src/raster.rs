@@ -6,10 +6,14 @@
 //! so the output is bit-identical for any thread count. Coverage uses exact integer edge
 //! functions with a top-left fill rule: a pixel centre on an edge shared by two triangles
 //! belongs to exactly one of them (watertight, no double hits). The per-vertex depth
-//! attribute is interpolated perspective-correctly (through 1/w).
+//! attribute and the barycentrics of the source triangle (which alpha-masked casters read
+//! their texture through) are interpolated perspective-correctly (through 1/w).
 
 use crate::math::{orient2d_i64, Vec4};
 use rayon::prelude::*;
+
+mod buffers;
+pub use buffers::{coverage_count, depth_buffer, depth_buffer_where, DepthBuffer, NO_TRIANGLE};
 
 /// Side of a square tile in pixels.
 pub const TILE: u32 = 64;
@@ -37,6 +41,8 @@ pub struct SetupTriangle {
     inv_w: [f32; 3],
     /// depth/w at each vertex.
     d_over_w: [f32; 3],
+    /// The source triangle's barycentrics of vertices 1 and 2, over w, at each vertex.
+    b_over_w: [[f32; 2]; 3],
     /// Pixel bounding box, inclusive min, exclusive max.
     bbox: [u32; 4],
 }
@@ -52,6 +58,9 @@ pub struct Fragment {
     pub id: u32,
     /// Interpolated depth attribute.
     pub depth: f32,
+    /// Barycentrics of the pixel centre in the source triangle (weights of its vertices
+    /// 0, 1, 2), interpolated perspective-correctly through clipping.
+    pub bary: [f32; 3],
 }
 
 /// A rectangle of pixels, `[x0, x1) × [y0, y1)`.
@@ -82,12 +91,17 @@ impl TileRect {
 struct ClipVert {
     c: Vec4,
     d: f32,
+    b: [f32; 2],
 }
 
 fn lerp_vert(a: ClipVert, b: ClipVert, t: f32) -> ClipVert {
     ClipVert {
         c: a.c + (b.c - a.c) * t,
         d: a.d + (b.d - a.d) * t,
+        b: [
+            a.b[0] + (b.b[0] - a.b[0]) * t,
+            a.b[1] + (b.b[1] - a.b[1]) * t,
+        ],
     }
 }
 
@@ -189,10 +203,12 @@ impl TriangleSetup {
             }
         }
         a.clear();
+        const CORNERS: [[f32; 2]; 3] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
         for k in 0..3 {
             a.push(ClipVert {
                 c: clip[k],
                 d: d[k],
+                b: CORNERS[k],
             });
         }
         if !inside_all {
@@ -205,7 +221,7 @@ impl TriangleSetup {
             }
         }
         // Project and snap every polygon vertex once, then fan-triangulate.
-        let mut verts = [([0i64; 2], 0f32, 0f32); 12];
+        let mut verts = [([0i64; 2], 0f32, 0f32, [0f32; 2]); 12];
         let n = a.len().min(12);
         for k in 0..n {
             let v = a[k];
@@ -214,7 +230,7 @@ impl TriangleSetup {
             let sy = (0.5 - v.c.y * iw * 0.5) * height as f32;
             let fx = (sx * SUBPIXEL).round() as i64;
             let fy = (sy * SUBPIXEL).round() as i64;
-            verts[k] = ([fx, fy], iw, v.d * iw);
+            verts[k] = ([fx, fy], iw, v.d * iw, [v.b[0] * iw, v.b[1] * iw]);
         }
         for k in 1..n - 1 {
             push_triangle(
@@ -230,7 +246,7 @@ impl TriangleSetup {
 
 fn push_triangle(
     id: u32,
-    mut t: [([i64; 2], f32, f32); 3],
+    mut t: [([i64; 2], f32, f32, [f32; 2]); 3],
     width: u32,
     height: u32,
     out: &mut Vec<SetupTriangle>,
@@ -281,6 +297,7 @@ fn push_triangle(
         area,
         inv_w: [t[0].1, t[1].1, t[2].1],
         d_over_w: [t[0].2, t[1].2, t[2].2],
+        b_over_w: [t[0].3, t[1].3, t[2].3],
         bbox,
     });
 }
@@ -381,6 +398,9 @@ fn raster_triangle(t: &SetupTriangle, rect: &TileRect, emit: &mut impl FnMut(Fra
     };
     let (inv_w_at, inv_w_step) = attribute(t.inv_w);
     let (dw_at, dw_step) = attribute(t.d_over_w);
+    let bw = &t.b_over_w;
+    let (b1w_at, b1w_step) = attribute([bw[0][0], bw[1][0], bw[2][0]]);
+    let (b2w_at, b2w_step) = attribute([bw[0][1], bw[1][1], bw[2][1]]);
     // Wide boxes walk only each row's covered span, found exactly from the edge functions;
     // narrow ones test every pixel, which is cheaper than the three divisions a span takes.
     let spans = x1 - x0 > SPAN_MIN_WIDTH;
@@ -392,14 +412,19 @@ fn raster_triangle(t: &SetupTriangle, rect: &TileRect, emit: &mut impl FnMut(Fra
         };
         let mut e: [i64; 3] = std::array::from_fn(|k| row[k] + a[k] * xs as i64);
         let (inv_w0, dw0) = (inv_w_at(&e), dw_at(&e));
+        let (b1w0, b2w0) = (b1w_at(&e), b2w_at(&e));
         let mut i = 0.0f64;
         let mut fragment = |x: u32, i: f64| {
-            let depth = ((dw0 + dw_step * i) / (inv_w0 + inv_w_step * i)) as f32;
+            let inv_w = inv_w0 + inv_w_step * i;
+            let depth = ((dw0 + dw_step * i) / inv_w) as f32;
+            let b1 = ((b1w0 + b1w_step * i) / inv_w) as f32;
+            let b2 = ((b2w0 + b2w_step * i) / inv_w) as f32;
             emit(Fragment {
                 x,
                 y,
                 id: t.id,
                 depth,
+                bary: [1.0 - b1 - b2, b1, b2],
             });
         };
         if spans {
@@ -457,94 +482,12 @@ fn covered_span(row: &[i64; 3], a: &[i64; 3], width: u32) -> (u32, u32) {
     }
 }
 
-/// A depth buffer with the id of the nearest triangle per pixel.
-#[derive(Clone, Debug)]
-pub struct DepthBuffer {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Nearest depth per pixel (`+inf` where empty), row-major from the top row.
-    pub depth: Vec<f32>,
-    /// Triangle id per pixel ([`NO_TRIANGLE`] where empty).
-    pub id: Vec<u32>,
-}
-
-/// Marks a pixel that no triangle covers.
-pub const NO_TRIANGLE: u32 = u32::MAX;
-
-impl DepthBuffer {
-    /// Bytes held.
-    pub fn memory_bytes(&self) -> usize {
-        self.depth.len() * 4 + self.id.len() * 4
-    }
-}
-
-/// Rasterizes the nearest surface (smallest depth attribute; ties keep the lower
-/// triangle index) into a depth and id buffer.
-pub fn depth_buffer(tris: &[SetupTriangle], width: u32, height: u32) -> DepthBuffer {
-    let tiles = rasterize(
-        tris,
-        width,
-        height,
-        |r| {
-            let n = (r.width() * r.height()) as usize;
-            (vec![f32::INFINITY; n], vec![NO_TRIANGLE; n])
-        },
-        |(d, id): &mut (Vec<f32>, Vec<u32>), r, f| {
-            let k = ((f.y - r.y0) * r.width() + (f.x - r.x0)) as usize;
-            if f.depth < d[k] {
-                d[k] = f.depth;
-                id[k] = f.id;
-            }
-        },
-    );
-    let n = width as usize * height as usize;
-    let mut out = DepthBuffer {
-        width,
-        height,
-        depth: vec![f32::INFINITY; n],
-        id: vec![NO_TRIANGLE; n],
-    };
-    for (r, (d, id)) in tiles {
-        for y in r.y0..r.y1 {
-            let src = ((y - r.y0) * r.width()) as usize;
-            let dst = (y * width + r.x0) as usize;
-            let w = r.width() as usize;
-            out.depth[dst..dst + w].copy_from_slice(&d[src..src + w]);
-            out.id[dst..dst + w].copy_from_slice(&id[src..src + w]);
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::math::{vec3, Mat4, Vec3};
 
     use crate::math::TestRng as Lcg;
-
-    /// How many fragments each pixel received.
-    fn coverage_count(tris: &[SetupTriangle], width: u32, height: u32) -> Vec<u32> {
-        let tiles = rasterize(
-            tris,
-            width,
-            height,
-            |r| vec![0u32; (r.width() * r.height()) as usize],
-            |c: &mut Vec<u32>, r, f| c[((f.y - r.y0) * r.width() + (f.x - r.x0)) as usize] += 1,
-        );
-        let mut out = vec![0u32; width as usize * height as usize];
-        for (r, c) in tiles {
-            for y in r.y0..r.y1 {
-                for x in r.x0..r.x1 {
-                    out[(y * width + x) as usize] =
-                        c[((y - r.y0) * r.width() + (x - r.x0)) as usize];
-                }
-            }
-        }
-        out
-    }
 
     /// The span a row walks holds exactly the pixels whose three edge functions are ≥ 0.
     #[test]

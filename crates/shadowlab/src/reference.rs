@@ -8,7 +8,9 @@
 //! watertight test of [`crate::math::intersect_triangle`], shared with the brute-force
 //! check, so the BVH and a loop over all triangles return the same answer. Semi-transparent
 //! casters multiply their RGB transmittance; the product is taken in triangle-index order
-//! so it is bit-identical whatever order the BVH visits them in.
+//! so it is bit-identical whatever order the BVH visits them in. An alpha-masked triangle
+//! is met only where its texture keeps it ([`Scene::cut_out`] at the hit's barycentrics),
+//! by shadow rays and primary rays alike.
 
 use crate::frame::{Frame, Visibility};
 use crate::light::Light;
@@ -119,6 +121,7 @@ impl<'s> Reference<'s> {
                     return f32::INFINITY;
                 }
                 intersect_triangle(o, dir, 0.0, t_max, scene.triangle(tri as usize))
+                    .filter(|h| !scene.cut_out(tri as usize, h.b))
                     .map_or(f32::INFINITY, |h| h.t * s)
             });
             return if miss { Vec3::ONE } else { Vec3::ZERO };
@@ -130,7 +133,8 @@ impl<'s> Reference<'s> {
             if opaque || tri == own {
                 return;
             }
-            if intersect_triangle(o, dir, 0.0, t_max, scene.triangle(tri as usize)).is_some() {
+            let hit = intersect_triangle(o, dir, 0.0, t_max, scene.triangle(tri as usize));
+            if hit.is_some_and(|h| !scene.cut_out(tri as usize, h.b)) {
                 if scene.material_of(tri as usize).is_opaque() {
                     opaque = true;
                 } else {
@@ -154,7 +158,10 @@ impl<'s> Reference<'s> {
         self.bvh
             .ray_traverse(ray, &mut obvhs::ray::RayHit::none(), |_, id| {
                 let tri = prim[id];
-                match intersect_triangle(o, dir, 0.0, f32::INFINITY, scene.triangle(tri as usize)) {
+                let hit =
+                    intersect_triangle(o, dir, 0.0, f32::INFINITY, scene.triangle(tri as usize))
+                        .filter(|h| !scene.cut_out(tri as usize, h.b));
+                match hit {
                     Some(h) => {
                         let better = match best {
                             None => true,
@@ -273,7 +280,8 @@ pub fn brute_force_occlusion(scene: &Scene, o: Vec3, dir: Vec3, t_max: f32, own:
         if i as u32 == own {
             continue;
         }
-        if intersect_triangle(o, dir, 0.0, t_max, scene.triangle(i)).is_some() {
+        let hit = intersect_triangle(o, dir, 0.0, t_max, scene.triangle(i));
+        if hit.is_some_and(|h| !scene.cut_out(i, h.b)) {
             if scene.material_of(i).is_opaque() {
                 return Vec3::ZERO;
             }
@@ -301,6 +309,7 @@ mod tests {
                 name: "glass".into(),
                 color: Vec3::ONE,
                 transmittance: vec3(0.9, 0.5, 0.25),
+                alpha_mask: None,
             });
             for i in 0..300 {
                 let c = rng.v();

@@ -114,7 +114,11 @@ impl ViewSamples {
             // The depth test runs on view depth, which is clip w.
             (c, c.map(|c| c.w))
         });
-        let buf = raster::depth_buffer(&setups, w, h);
+        // An alpha-masked surface is no surface where its texture cuts it out.
+        let masked = scene.has_alpha_masks();
+        let buf = raster::depth_buffer_where(&setups, w, h, |f| {
+            !masked || !scene.cut_out(f.id as usize, f.bary)
+        });
         let n = w as usize * h as usize;
         let what = format!("the {w}x{h} camera pass");
         let zeros = || crate::limits::try_filled(n, Vec3::ZERO, &what);
@@ -272,7 +276,7 @@ impl ViewLayers {
             |_| Vec::new(),
             |frags: &mut Vec<(u32, f32, u32)>, _, f| {
                 let k = (f.y * w + f.x) as usize;
-                if see_through(k) {
+                if see_through(k) && !scene.cut_out(f.id as usize, f.bary) {
                     frags.push((k as u32, f.depth, f.id));
                 }
             },

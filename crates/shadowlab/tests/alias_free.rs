@@ -365,6 +365,7 @@ fn random_scene(rng: &mut Lcg, count: usize, glass: bool) -> Scene {
         name: "glass".into(),
         color: Vec3::ONE,
         transmittance: vec3(0.9, 0.5, 0.25),
+        alpha_mask: None,
     });
     let g = 3.0;
     s.push(

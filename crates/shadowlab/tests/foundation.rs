@@ -137,6 +137,7 @@ fn sheets(floor: Vec3, transmittance: [Vec3; 2], color: [Vec3; 2]) -> (Scene, Ca
             name: name.into(),
             color: color[i],
             transmittance: transmittance[i],
+            alpha_mask: None,
         }));
     }
     for (i, (y, h)) in [(0.0, 4.0), (1.0, 1.0), (2.0, 0.5)].into_iter().enumerate() {

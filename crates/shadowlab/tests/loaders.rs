@@ -68,6 +68,7 @@ const DATA_MESHES: &[(&str, usize)] = &[
     ("gltf/BoxTextured.glb", 12),
     ("lenient/edges.obj", 8),
     ("lenient/lines.gltf", 3),
+    ("masked/leaf.gltf", 4),
 ];
 
 #[test]

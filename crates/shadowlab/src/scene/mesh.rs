@@ -102,6 +102,7 @@ impl Scene {
                 v.truncate(triangles);
             }
             self.material.truncate(triangles);
+            self.uv.truncate(triangles);
             self.materials.pop();
             self.bounds = bounds;
             return Err(e);

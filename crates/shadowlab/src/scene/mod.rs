@@ -15,6 +15,7 @@
 //!   buffers, accessors, nodes, meshes, materials, cameras, lights).
 //! - [`toml`]: the TOML scene format (the file's structure, its `[[mesh]]` entries, its
 //!   `[camera]` and `[light]` sections).
+//! - [`alpha_mask`]: alpha-masked casters (a texture's alpha cutting triangles out).
 //! - [`mesh`]: meshes added and edited in place; [`export`]: a scene written back as OBJ;
 //!   `repeats`: faces that repeat an earlier opaque face, dropped on loading.
 //!
@@ -22,6 +23,7 @@
 //! ray-traced estimate, which sits above this layer (the crate's `auto_light` module, whose
 //! `load` is this [`load`] followed by that choice).
 
+pub mod alpha_mask;
 pub mod builtin;
 pub mod export;
 pub mod gltf;
@@ -36,7 +38,8 @@ use crate::error::{Error, Result};
 use crate::files;
 use crate::light::Light;
 use crate::limits;
-use crate::math::{vec3, Aabb, Mat4, Vec3};
+use crate::math::{vec3, Aabb, Mat4, Vec2, Vec3};
+use alpha_mask::AlphaMask;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -97,6 +100,10 @@ pub struct Material {
     /// RGB transmittance of light passing *through* the surface: (0,0,0) for an opaque
     /// caster, (0.9, 0.9, 0.9) for a 10%-opaque one.
     pub transmittance: Vec3,
+    /// The texture alpha that cuts the triangles out where it is below a cut-off (glTF's
+    /// `alphaMode: MASK`); their texture coordinates are [`Scene::uv`]. Not serialized.
+    #[serde(skip)]
+    pub alpha_mask: Option<AlphaMask>,
 }
 
 impl Default for Material {
@@ -105,6 +112,7 @@ impl Default for Material {
             name: "default".into(),
             color: Vec3::splat(0.8),
             transmittance: Vec3::ZERO,
+            alpha_mask: None,
         }
     }
 }
@@ -116,6 +124,7 @@ impl Material {
             name: name.into(),
             color,
             transmittance: Vec3::ZERO,
+            alpha_mask: None,
         }
     }
 
@@ -140,6 +149,10 @@ pub struct Scene {
     pub material: Vec<u32>,
     /// The materials.
     pub materials: Vec<Material>,
+    /// Texture coordinates of each triangle's three vertices, read where its material has
+    /// an [`Material::alpha_mask`]: empty while no triangle needs them, else one entry per
+    /// triangle (zero for triangles without a mask).
+    pub uv: Vec<[Vec2; 3]>,
     /// Bounds of all vertices (kept current by the methods that add triangles).
     pub bounds: Aabb,
     /// The scene's own camera, if it has one.
@@ -202,6 +215,13 @@ impl Scene {
 
     /// Appends one triangle.
     pub fn push(&mut self, t: [Vec3; 3], material: u32) {
+        if !self.uv.is_empty() {
+            self.uv.push([Vec2::ZERO; 3]);
+        }
+        self.push_position(t, material);
+    }
+
+    fn push_position(&mut self, t: [Vec3; 3], material: u32) {
         self.v0.push(t[0]);
         self.v1.push(t[1]);
         self.v2.push(t[2]);
@@ -263,7 +283,10 @@ impl Scene {
         self.materials.extend(other.materials.iter().cloned());
         self.reserve(other.len());
         for i in 0..other.len() {
-            self.push(other.triangle(i), base + other.material[i]);
+            match other.uv.get(i) {
+                Some(&uv) => self.push_textured(other.triangle(i), uv, base + other.material[i]),
+                None => self.push(other.triangle(i), base + other.material[i]),
+            }
         }
     }
 
@@ -308,6 +331,7 @@ impl Scene {
                 )));
             }
         }
+        self.validate_alpha_masks().map_err(err)?;
         for m in &self.materials {
             let ok = m.color.is_finite() && m.transmittance.is_finite();
             if !ok || m.transmittance.min_element() < 0.0 || m.transmittance.max_element() > 1.0 {

@@ -371,5 +371,6 @@ fn convert(m: &tobj::Material) -> Material {
         name: m.name.clone(),
         color,
         transmittance,
+        alpha_mask: None,
     }
 }

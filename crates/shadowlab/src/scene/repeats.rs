@@ -7,7 +7,8 @@
 //! *opaque* face is therefore dropped when a file is loaded: a ray or texel that meets the
 //! copy meets the earlier face at the same depth, and the camera pass's ties already go to
 //! the lower index, so no pixel of any technique or of the reference changes. Repeats of a
-//! semi-transparent face stay, since each copy filters the light again.
+//! semi-transparent or alpha-masked face stay, since each copy filters the light again (or
+//! may carry other texture coordinates).
 
 use super::Scene;
 
@@ -46,7 +47,9 @@ impl Scene {
                 if earlier.iter().any(|&e| bits(e) == v) {
                     drop[i] = true;
                     dropped += 1;
-                } else if self.material_of(i).is_opaque() {
+                } else if self.material_of(i).is_opaque()
+                    && self.material_of(i).alpha_mask.is_none()
+                {
                     earlier.push(i);
                 }
             }
@@ -68,6 +71,9 @@ impl Scene {
             self.v1[w] = self.v1[r];
             self.v2[w] = self.v2[r];
             self.material[w] = self.material[r];
+            if !self.uv.is_empty() {
+                self.uv[w] = self.uv[r];
+            }
             w += 1;
             kept_before += 1;
         }
@@ -78,6 +84,7 @@ impl Scene {
         self.v1.truncate(w);
         self.v2.truncate(w);
         self.material.truncate(w);
+        self.uv.truncate(w);
         dropped
     }
 }

@@ -4,6 +4,8 @@
 //! The light's view is rasterized by the shared rasterizer into a square map of linear
 //! depths (one map for directional and spot lights, a cube of six for point lights). A
 //! receiver is in shadow when its own light depth, less a bias, lies behind the map.
+//! An alpha-masked caster's texels are left out of the map where its texture cuts it out
+//! (the texture read at each texel centre's barycentrics), as in every map built here.
 //!
 //! PCF here is the software equivalent of hardware PCF: each of the `kernel × kernel`
 //! taps makes four depth comparisons at the surrounding texel centres and weighs them
@@ -140,7 +142,10 @@ pub fn render_depth_map(scene: &Scene, view: &LightView, res: u32) -> DepthBuffe
             t.map(|p| -lv.transform_point3(p).z),
         )
     });
-    raster::depth_buffer(&setups, res, res)
+    let masked = scene.has_alpha_masks();
+    raster::depth_buffer_where(&setups, res, res, |f| {
+        !masked || !scene.cut_out(f.id as usize, f.bary)
+    })
 }
 
 /// The views and maps of `light` for this frame, fitted to the visible receivers.

@@ -43,6 +43,7 @@ pub(super) fn build(p: &Params) -> Result<Scene> {
         name: "hair".into(),
         color: vec3(0.55, 0.38, 0.22),
         transmittance: Vec3::splat(HAIR_TRANSMITTANCE),
+        alpha_mask: None,
     });
     let ground = s.add_material(Material::opaque("ground", vec3(0.75, 0.75, 0.72)));
     s.v0 = vec![Vec3::ZERO; n];

@@ -63,7 +63,11 @@ pub(super) fn load_buffers(
 /// The file a non-`data:` buffer URI names: a relative, percent-encoded reference
 /// resolved against the glTF file's folder, or a `file:` URI, decoded first and then
 /// kept where `access` allows. `Err` is a phrase following the URI.
-fn resolve_uri(base: &Path, access: &Access, uri: &str) -> std::result::Result<PathBuf, String> {
+pub(super) fn resolve_uri(
+    base: &Path,
+    access: &Access,
+    uri: &str,
+) -> std::result::Result<PathBuf, String> {
     let decoded = if let Some(rest) = uri
         .strip_prefix("file://")
         .or_else(|| uri.strip_prefix("file:"))

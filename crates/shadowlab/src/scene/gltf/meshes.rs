@@ -3,7 +3,7 @@
 
 use super::{Loader, ModeName, Skip};
 use crate::error::Result;
-use crate::math::{vec3, Vec3};
+use crate::math::{vec2, vec3, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use std::rc::Rc;
@@ -13,6 +13,8 @@ pub(super) struct Primitive {
     pub(super) positions: Vec<Vec3>,
     pub(super) tris: Vec<[u32; 3]>,
     pub(super) material: u32,
+    /// Texture coordinates per vertex, read for alpha-masked materials only.
+    pub(super) uv: Option<Vec<Vec2>>,
 }
 
 impl Loader<'_> {
@@ -106,15 +108,53 @@ impl Loader<'_> {
                 }
             };
             let material = self.material(prim.material())?;
+            let uv = if self.scene.materials[material as usize].alpha_mask.is_some() {
+                Some(self.tex_coords(&prim, positions.len(), &at)?)
+            } else {
+                None
+            };
             prims.push(Primitive {
                 positions,
                 tris,
                 material,
+                uv,
             });
         }
         let prims = Rc::new(prims);
         self.meshes[mesh.index()] = Some(prims.clone());
         Ok(prims)
+    }
+}
+
+impl Loader<'_> {
+    /// The texture coordinates of an alpha-masked primitive's `n` vertices, from the set
+    /// its base colour texture names (`TEXCOORD_0` by default); without that attribute
+    /// every vertex reads the texture at (0, 0), and the warnings say so.
+    fn tex_coords(&mut self, prim: &gltf::Primitive, n: usize, at: &str) -> Result<Vec<Vec2>> {
+        let set = prim
+            .material()
+            .pbr_metallic_roughness()
+            .base_color_texture()
+            .map_or(0, |t| t.tex_coord());
+        let Some(acc) = prim.get(&gltf::Semantic::TexCoords(set)) else {
+            *self.skipped.entry(Skip::NoTexCoords).or_default() += 1;
+            return Ok(vec![Vec2::ZERO; n]);
+        };
+        if acc.dimensions() != Dimensions::Vec2 || acc.count() != n {
+            return Err(self.err(format!(
+                "{at}: TEXCOORD_{set} accessor {} is not VEC2 with one element per vertex",
+                acc.index()
+            )));
+        }
+        let raw = self.read_accessor(&acc, at)?;
+        let uv: Vec<Vec2> = raw
+            .chunks_exact(2)
+            .map(|c| vec2(c[0] as f32, c[1] as f32))
+            .collect();
+        if let Some(v) = uv.iter().position(|t| !t.is_finite()) {
+            return Err(self.err(format!("{at}: vertex {v} has a non-finite TEXCOORD_{set}")));
+        }
+        Ok(uv)
     }
 }
 

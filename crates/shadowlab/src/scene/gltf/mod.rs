@@ -14,8 +14,16 @@
 //!   primitives without `POSITION` (the specification says to skip them). Skins and morph
 //!   targets are ignored: the mesh is used in its bind pose.
 //! - Materials: the base colour factor gives the colour; alpha mode `BLEND` with alpha `a`
-//!   gives the transmittance `1 − a` in every channel; `MASK` and `OPAQUE` are opaque.
-//!   Textures are never loaded, so missing or undecodable images are not errors. A
+//!   gives the transmittance `1 − a` in every channel (the texture's alpha is not used,
+//!   as before: a uniform filter); `OPAQUE` is opaque. `MASK` is an alpha mask
+//!   ([`crate::scene::alpha_mask`]): the base colour texture's alpha times the factor's,
+//!   read by the nearest texel at the interpolated texture coordinates of the set the
+//!   texture names (`TEXCOORD_0` by default), with the sampler's wrap modes, against
+//!   `alphaCutoff` (default 0.5); a cut-out point neither casts a shadow nor is seen, in
+//!   every technique and the reference. Only the images of `MASK` materials are read
+//!   (`textures`): PNG and GIF are decoded, a JPEG has no alpha and is opaque; one that
+//!   cannot be read leaves its material opaque and is named in the warnings.
+//!   `KHR_texture_transform` is not read (the extension warnings say so). A
 //!   primitive without a material gets [`Material::default`]. Material extensions
 //!   (`KHR_materials_transmission`, `…_volume`, …) are ignored.
 //! - The camera nodes met in that walk, in order; the one at the asked index
@@ -51,7 +59,8 @@
 //! of the top-level arrays, the crate's validation and the extensions), `buffers` (the
 //! buffers and their URIs), `accessors` (accessors, sparse ones included, decoded to
 //! numbers), `nodes` (the hierarchy walk and its transforms), `meshes` (primitives into
-//! triangles), `materials` (colour and alpha), `cameras` and `lights`
+//! triangles), `materials` (colour, alpha and masks), `textures` (the masks' images),
+//! `cameras` and `lights`
 //! (`KHR_lights_punctual`); this module holds what they share and puts them together.
 
 mod accessors;
@@ -62,6 +71,7 @@ mod lights;
 mod materials;
 mod meshes;
 mod nodes;
+mod textures;
 
 use super::Scene;
 use crate::error::{Error, Result};
@@ -178,6 +188,7 @@ pub fn load_with(path: &Path, access: &Access, camera_index: usize) -> Result<Sc
     let name = super::file_name(path);
     let mut loader = Loader {
         path,
+        access,
         doc: &document,
         buffers,
         scene: Scene::new(name),
@@ -187,6 +198,8 @@ pub fn load_with(path: &Path, access: &Access, camera_index: usize) -> Result<Sc
         cameras: Vec::new(),
         light: None,
         skipped: Default::default(),
+        textures: Default::default(),
+        notes: Vec::new(),
     };
     let planned = loader.walk(true)?;
     super::check_triangle_count(path, planned)?;
@@ -199,6 +212,7 @@ pub fn load_with(path: &Path, access: &Access, camera_index: usize) -> Result<Sc
         cameras,
         light,
         skipped,
+        notes,
         ..
     } = loader;
     let name = scene.name.clone();
@@ -228,6 +242,7 @@ pub fn load_with(path: &Path, access: &Access, camera_index: usize) -> Result<Sc
             .into_iter()
             .map(|(what, n)| format!("{name}: {}", what.describe(n))),
     );
+    warnings.extend(notes.into_iter().map(|n| format!("{name}: {n}")));
     scene.warnings = warnings;
     Ok(scene)
 }
@@ -243,8 +258,10 @@ enum Skip {
     MorphTargets,
     /// A node with a skin (its mesh used in the bind pose).
     Skin,
-    /// A material with alpha mode `MASK`, cast as opaque.
+    /// A material with alpha mode `MASK` whose texture could not be read, cast as opaque.
     Mask,
+    /// An alpha-masked primitive without the texture coordinates its texture names.
+    NoTexCoords,
     /// A material with alpha mode `BLEND`, cast with its uniform alpha.
     Blend,
 }
@@ -278,7 +295,10 @@ impl Skip {
             ),
             Skip::Skin => format!("ignored the skin of {n} node{s} (each mesh is used in its bind pose)"),
             Skip::Mask => format!(
-                "{n} material{s} with alpha mode MASK cast opaque shadows (the texture's alpha is not used)"
+                "{n} material{s} with alpha mode MASK cast opaque shadows (their texture could not be read)"
+            ),
+            Skip::NoTexCoords => format!(
+                "{n} alpha-masked primitive{s} lack the texture coordinates their texture names (the texture is read at (0, 0) everywhere)"
             ),
             Skip::Blend => format!(
                 "{n} material{s} with alpha mode BLEND cast shadows of uniform transmittance 1 − alpha (the texture's alpha is not used)"
@@ -291,6 +311,8 @@ impl Skip {
 /// what the hierarchy walk has met.
 struct Loader<'a> {
     path: &'a Path,
+    /// Where the file's image URIs may point.
+    access: &'a Access,
     doc: &'a gltf::Document,
     buffers: Vec<Vec<u8>>,
     scene: Scene,
@@ -305,6 +327,10 @@ struct Loader<'a> {
     light: Option<(usize, Mat4)>,
     /// How many of each kind of thing were skipped or approximated.
     skipped: std::collections::BTreeMap<Skip, usize>,
+    /// Alpha textures by glTF image index, once read (or why they could not be).
+    textures: std::collections::BTreeMap<usize, textures::TextureResult>,
+    /// Sentences for the warnings beyond the counted kinds (an unreadable texture).
+    notes: Vec<String>,
 }
 
 impl Loader<'_> {

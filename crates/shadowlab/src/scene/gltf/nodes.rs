@@ -83,8 +83,23 @@ impl Loader<'_> {
                         (self.scene.len() + added) as u64,
                     )?;
                     for p in prims.iter() {
-                        self.scene
-                            .push_indexed(&p.positions, &p.tris, world, p.material);
+                        match &p.uv {
+                            None => {
+                                self.scene
+                                    .push_indexed(&p.positions, &p.tris, world, p.material)
+                            }
+                            Some(uv) => {
+                                for t in &p.tris {
+                                    let v =
+                                        t.map(|i| world.transform_point3(p.positions[i as usize]));
+                                    self.scene.push_textured(
+                                        v,
+                                        t.map(|i| uv[i as usize]),
+                                        p.material,
+                                    );
+                                }
+                            }
+                        }
                     }
                 }
             }

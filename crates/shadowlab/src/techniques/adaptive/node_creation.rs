@@ -78,7 +78,10 @@ pub(super) fn render_tile(
             t.map(|p| -light_from_world.transform_point3(p).z),
         )
     });
-    let buf = raster::depth_buffer(&setups, res, res);
+    let masked = scene.has_alpha_masks();
+    let buf = raster::depth_buffer_where(&setups, res, res, |f| {
+        !masked || !scene.cut_out(selection[f.id as usize] as usize, f.bary)
+    });
     let id = buf
         .id
         .into_iter()

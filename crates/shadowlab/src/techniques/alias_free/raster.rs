@@ -8,7 +8,8 @@
 //! The paper's occlusion culling: a node whose samples are all in shadow is skipped by
 //! every later triangle, and a triangle beyond a node's maximum depth skips the node.
 //! Semi-transparent casters (Section 4) modulate the sample's RGB transmittance, an opaque
-//! one sets it to black.
+//! one sets it to black. An alpha-masked caster counts only where its texture keeps it, at
+//! the barycentrics of the exact ray test (the reference's own bits).
 //!
 //! The work is split over the subtrees of the BSP (units, each owning its samples), and each
 //! unit takes its triangles in index order, binned in fixed chunks: results and counters
@@ -59,6 +60,7 @@ struct Caster {
     v: [Vec3; 3],
     opaque: bool,
     transmittance: Vec3,
+    masked: bool,
 }
 
 /// The caster of triangle `id`.
@@ -68,6 +70,7 @@ fn caster(scene: &Scene, id: u32) -> Caster {
         v: scene.triangle(id as usize),
         opaque: m.is_opaque(),
         transmittance: m.transmittance,
+        masked: m.alpha_mask.is_some(),
     }
 }
 
@@ -179,7 +182,11 @@ impl Unit<'_> {
                 }
                 self.counters.ray_tests += 1;
                 let c = caster.get_or_insert_with(|| self::caster(scene, t.id));
-                if ray.hits(c.v) {
+                let hit = match ray.hit(c.v) {
+                    Some(b) => !c.masked || !scene.cut_out(t.id as usize, b),
+                    None => false,
+                };
+                if hit {
                     let j = base + i;
                     if c.opaque {
                         self.vis[j] = Vec3::ZERO;

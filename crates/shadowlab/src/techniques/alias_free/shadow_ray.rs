@@ -44,13 +44,19 @@ impl ShadowRay {
 
     /// True when the ray hits triangle `v` strictly between its ends: the same answer, from
     /// the same floating-point operations, as `intersect_triangle(o, dir, 0, t_max, v)`.
-    #[inline]
+    #[cfg(test)]
     pub(super) fn hits(&self, v: [Vec3; 3]) -> bool {
+        self.hit(v).is_some()
+    }
+
+    /// [`Self::hits`] with the hit's barycentrics, the same bits as the reference's.
+    #[inline]
+    pub(super) fn hit(&self, v: [Vec3; 3]) -> Option<[f32; 3]> {
         let shear = RayShear {
             k: self.k.map(usize::from),
             s: self.s,
         };
-        intersect_sheared(Vec3::from_array(self.o), shear, 0.0, self.t_max, v).is_some()
+        intersect_sheared(Vec3::from_array(self.o), shear, 0.0, self.t_max, v).map(|h| h.b)
     }
 }
 

@@ -105,9 +105,13 @@ fn clip_triangle(t: [Vec3; 3], w_row: Vec4, clip: f32, out: &mut Vec<[Vec3; 3]>)
     }
 }
 
+/// A piece of a triangle cut by the clip plane: the source triangle and the piece's
+/// world-space vertices.
+pub(super) type Piece = (u32, [Vec3; 3]);
+
 /// The pieces of the triangles that cross the clip plane `w_row · p = clip`, cut in world
 /// space (the whole ones go to the rasterizer as they are).
-pub(super) fn clipped_pieces(frame: &Frame, setup: &Setup) -> Vec<[Vec3; 3]> {
+pub(super) fn clipped_pieces(frame: &Frame, setup: &Setup) -> Vec<Piece> {
     let scene = frame.scene;
     let (w_row, clip) = (setup.w_row, setup.clip_depth);
     if scene
@@ -119,17 +123,20 @@ pub(super) fn clipped_pieces(frame: &Frame, setup: &Setup) -> Vec<[Vec3; 3]> {
         return Vec::new();
     }
     const CHUNK: usize = 8192;
-    let parts: Vec<Vec<[Vec3; 3]>> = (0..scene.len().div_ceil(CHUNK))
+    let parts: Vec<Vec<Piece>> = (0..scene.len().div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
             let mut out = Vec::new();
+            let mut cut = Vec::new();
             for i in c * CHUNK..((c + 1) * CHUNK).min(scene.len()) {
                 let t = scene.triangle(i);
                 let d = t.map(|p| w_row.dot(p.extend(1.0)));
                 let lo = d[0].min(d[1]).min(d[2]);
                 let hi = d[0].max(d[1]).max(d[2]);
                 if lo < clip && hi >= clip {
-                    clip_triangle(t, w_row, clip, &mut out);
+                    cut.clear();
+                    clip_triangle(t, w_row, clip, &mut cut);
+                    out.extend(cut.iter().map(|&p| (i as u32, p)));
                 }
             }
             out
@@ -144,7 +151,7 @@ pub(super) fn render_post_map(
     frame: &Frame,
     setup: &Setup,
     map: &PostMap,
-    pieces: &[[Vec3; 3]],
+    pieces: &[Piece],
     res: u32,
 ) -> Vec<f32> {
     let scene = frame.scene;
@@ -159,7 +166,7 @@ pub(super) fn render_post_map(
         let t = if i < n {
             scene.triangle(i)
         } else {
-            pieces[i - n]
+            pieces[i - n].1
         };
         let h = t.map(|p| p.extend(1.0));
         let wp = h.map(|h| w_row.dot(h));
@@ -173,6 +180,29 @@ pub(super) fn render_post_map(
             [sign * v[0].1, sign * v[1].1, sign * v[2].1],
         )
     });
+    // An alpha-masked caster reads its mask at the fragment's world point. The rasterizer's
+    // barycentrics `b'` are those of the post-perspective triangle, whose vertices were
+    // divided by `wp` first: the world triangle's are `b'_k / wp_k`, normalized. A piece
+    // reads the mask at its point in the whole triangle.
+    let masked = scene.has_alpha_masks();
+    let world = |t: [Vec3; 3], b: [f32; 3]| {
+        let q: [f32; 3] = std::array::from_fn(|k| b[k] / w_row.dot(t[k].extend(1.0)));
+        let s = q[0] + q[1] + q[2];
+        q.map(|x| x / s)
+    };
+    let cut_out = |f: raster::Fragment| {
+        let i = f.id as usize;
+        if !masked {
+            false
+        } else if i < n {
+            scene.material_of(i).alpha_mask.is_some()
+                && scene.cut_out(i, world(scene.triangle(i), f.bary))
+        } else {
+            let (src, p) = pieces[i - n];
+            let b = world(p, f.bary);
+            scene.cut_out_at(src as usize, p[0] * b[0] + p[1] * b[1] + p[2] * b[2])
+        }
+    };
     let tiles = raster::rasterize(
         &setups,
         res,
@@ -180,7 +210,7 @@ pub(super) fn render_post_map(
         |r| vec![f32::INFINITY; (r.width() * r.height()) as usize],
         |d: &mut Vec<f32>, r, f| {
             let k = ((f.y - r.y0) * r.width() + (f.x - r.x0)) as usize;
-            if f.depth < d[k] {
+            if f.depth < d[k] && !cut_out(f) {
                 d[k] = f.depth;
             }
         },

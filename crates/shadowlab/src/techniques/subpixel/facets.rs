@@ -60,6 +60,12 @@ impl RayPlane {
     pub(super) fn at(&self, x: f32, y: f32) -> Vec3 {
         self.d0 + self.dx * x + self.dy * y
     }
+
+    /// The origin and direction of the ray through image position `(x, y)`.
+    #[inline]
+    pub(super) fn ray(&self, x: f32, y: f32) -> (Vec3, Vec3) {
+        (self.eye, self.at(x, y))
+    }
 }
 
 /// A silhouette pixel's facet and what its visibility evaluation needs.

@@ -222,6 +222,11 @@ impl<M: Mask> Lut<M> {
         }
     }
 
+    /// The sample positions (pixel-local, in `[0, 1)²`), in bit order.
+    pub(super) fn samples(&self) -> &[Vec2] {
+        &self.samples
+    }
+
     /// The samples `s` (pixel-local, in `[0, 1)²`) with `a·s.x + b·s.y + c ≥ 0`: the table's
     /// entry, with the samples close enough to its line to be on either side tested exactly.
     #[inline]

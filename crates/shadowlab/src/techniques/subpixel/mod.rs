@@ -93,6 +93,12 @@
 //!   face only).
 //! - Semi-transparent casters are treated as opaque (bitmasks hold no transmittance), as in
 //!   `sm` and `pcf`.
+//! - Alpha-masked casters: every edge of a masked triangle counts as a silhouette (its
+//!   cut-out outline may run anywhere inside it), and each sample a masked blocker's
+//!   half-planes cover is tested exactly against the mask where its shadow ray meets the
+//!   triangle. Pixels whose facets reach no silhouette texel (an outline deep inside a large
+//!   masked triangle) take the depth-map test, which drops cut-out texels: there the outline
+//!   is as sharp as the map, as in `sm`.
 //! - The half-plane table is not the last word: quantized to [`LUT_ANGLES`] ×
 //!   [`LUT_DISTANCES`] entries, it moves a half-plane's edge by up to about 0.017 pixel,
 //!   and with a grid pattern a nearly horizontal or vertical shadow edge that close to a

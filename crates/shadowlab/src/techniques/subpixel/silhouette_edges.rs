@@ -37,7 +37,7 @@ impl std::fmt::Debug for Adjacency {
 const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
 const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
 
-/// A hash of every vertex position, to tell whether a cached adjacency still fits.
+/// A hash of every vertex position (and which triangles are alpha-masked), to tell whether a cached adjacency still fits.
 pub(super) fn fingerprint(scene: &Scene) -> u64 {
     const CHUNK: usize = 4096;
     let n = scene.len();
@@ -50,6 +50,10 @@ pub(super) fn fingerprint(scene: &Scene) -> u64 {
                     for x in p.to_array() {
                         h = (h ^ x.to_bits() as u64).wrapping_mul(FNV_PRIME);
                     }
+                }
+                // Alpha-masked triangles are welded differently (see `Adjacency::build`).
+                if scene.material_of(i).alpha_mask.is_some() {
+                    h = (h ^ 1).wrapping_mul(FNV_PRIME);
                 }
             }
             h
@@ -65,14 +69,22 @@ impl Adjacency {
     pub(super) fn build(scene: &Scene, fingerprint: u64) -> Self {
         let n = scene.len();
         let corner = |c: usize| scene.triangle(c / 3)[c % 3];
-        // Weld corners with bit-identical positions (after folding −0 into +0).
-        let key = |p: Vec3| {
-            let p = p + Vec3::ZERO;
-            [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]
+        // Weld corners with bit-identical positions (after folding −0 into +0). An
+        // alpha-masked triangle's corners weld with none: its outline may run anywhere
+        // inside it, so each of its edges is a boundary, a silhouette from every light.
+        let key = |c: usize| {
+            let p = corner(c) + Vec3::ZERO;
+            let t = c / 3;
+            let own = if scene.material_of(t).alpha_mask.is_some() {
+                t as u32 + 1
+            } else {
+                0
+            };
+            [p.x.to_bits(), p.y.to_bits(), p.z.to_bits(), own]
         };
-        let mut corners: Vec<([u32; 3], u32)> = (0..3 * n)
+        let mut corners: Vec<([u32; 4], u32)> = (0..3 * n)
             .into_par_iter()
-            .map(|c| (key(corner(c)), c as u32))
+            .map(|c| (key(c), c as u32))
             .collect();
         corners.par_sort_unstable();
         let mut vid = vec![0u32; 3 * n];

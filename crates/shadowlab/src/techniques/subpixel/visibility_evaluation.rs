@@ -5,13 +5,18 @@
 //! table. Their AND is ORed into the pixel's occlusion mask; the validity mask drops samples
 //! beyond the line where a triangle that cuts the facet rises above it. The occlusion ratio
 //! is `popcount(occlusion & validity) / popcount(validity)`.
+//!
+//! An alpha-masked blocker's half-planes bound its whole triangle; each sample they cover
+//! is then tested exactly where its shadow ray meets the triangle's plane, and dropped
+//! where the texture cuts the triangle out (the reference's test at that point).
 
 use super::blockers::Blocker;
 use super::facets::Facet;
-use super::lookup_table::{Lut, Mask};
+use super::lookup_table::Mask;
 use super::pairs::Pairs;
 use super::FrameState;
-use crate::math::{ndc_to_uv, Mat4, Vec2, Vec3};
+use crate::math::{intersect_plane, ndc_to_uv, Mat4, Vec2, Vec3};
+use crate::scene::Scene;
 use crate::view::ViewSamples;
 use rayon::prelude::*;
 
@@ -43,7 +48,7 @@ pub(super) fn evaluate_silhouette_pixels<M: Mask>(
             }
             cand.sort_unstable();
             cand.dedup();
-            evaluate(f, cand, &p.blockers, &st.lut, st.centre, &screen)
+            evaluate(f, cand, &p.blockers, st, &screen)
         })
         .collect()
 }
@@ -147,10 +152,11 @@ fn evaluate<M: Mask>(
     f: &Facet,
     blockers: &[u32],
     all: &[Option<Blocker>],
-    lut: &Lut<M>,
-    centre: M,
+    st: &FrameState<'_, M>,
     screen: &ScreenMap,
 ) -> Evaluated {
+    let (lut, centre) = (&st.lut, st.centre);
+    let scene = st.frame.scene;
     let mut occ = M::ZERO;
     let mut valid = M::from_u128(f.valid) & lut.all;
     let half = |pl: &[f32; 4]| {
@@ -220,6 +226,9 @@ fn evaluate<M: Mask>(
         if m != M::ZERO {
             m &= behind.unwrap_or_else(|| half(&bl.planes[3]));
         }
+        if m != M::ZERO && scene.material_of(bl.tri as usize).alpha_mask.is_some() {
+            m = kept_by_mask(m, f, bl, st, scene);
+        }
         occ |= m;
     }
     let nv = valid.ones();
@@ -230,4 +239,35 @@ fn evaluate<M: Mask>(
         valid: nv,
         boundary: shadowed > 0 && shadowed < nv,
     }
+}
+
+/// The samples of `m` whose shadow rays meet the alpha-masked blocker `bl` where its
+/// texture keeps it: each sample's point on the facet's tangent plane, its shadow ray, and
+/// [`Scene::cut_out`] at the barycentrics where that ray meets the triangle's plane.
+fn kept_by_mask<M: Mask>(
+    m: M,
+    f: &Facet,
+    bl: &Blocker,
+    st: &FrameState<'_, M>,
+    scene: &Scene,
+) -> M {
+    let mut kept = m;
+    for (i, s) in st.lut.samples().iter().enumerate() {
+        let bit = M::from_u128(1u128 << i);
+        if m & bit == M::ZERO {
+            continue;
+        }
+        let (o, d) = st.rays.ray(f.x + s.x, f.y + s.y);
+        let t = f.n.dot(f.p - o) / f.n.dot(d);
+        let x = o + d * t;
+        let (dir, _) = st.frame.light.shadow_ray(x);
+        let cut = match intersect_plane(x, dir, bl.v) {
+            Some(h) => scene.cut_out(bl.tri as usize, h.b),
+            None => true,
+        };
+        if cut || !t.is_finite() {
+            kept &= !bit;
+        }
+    }
+    kept
 }
