@@ -147,3 +147,58 @@ fn toml_scenes_read_area_lights_and_refuse_keys_that_do_not_apply() {
         assert!(e.contains(needle) && e.contains("[light]"), "{name}: {e}");
     }
 }
+
+/// Mean absolute luminance error of technique `name` against the soft reference with
+/// `n` light samples, over covered pixels, on `scene` seen by `camera` under its area light.
+fn soft_error(scene: &Scene, camera: &Camera, name: &str, n: u32) -> f64 {
+    let area = scene.area_light.expect("an area light");
+    let light = scene.light.unwrap();
+    let view = ViewSamples::render(scene, camera);
+    let frame = Frame::new(scene, camera, &light, &view).with_area(Some(&area), n);
+    let truth = soft(scene, camera, &view, n);
+    let shadows = shadowlab::techniques::create(name)
+        .unwrap()
+        .render(&frame)
+        .unwrap();
+    shadowlab::compare::compare(&view, &shadows.visibility, &truth.visibility).mean_abs_error
+}
+
+/// `scene` (a built-in name) at `w × h` with its own camera.
+fn builtin(name: &str, w: u32, h: u32) -> (Scene, Camera) {
+    let scene = shadowlab::scene::load(name, &Default::default()).unwrap();
+    let mut camera = scene.camera.unwrap();
+    camera.width = w;
+    camera.height = h;
+    camera.fit_depth_range(&scene.bounds);
+    (scene, camera)
+}
+
+#[test]
+fn pcss_beats_fixed_kernel_pcf_under_area_lights() {
+    // The bunny (a real mesh) under its sun given an angular diameter of 3°.
+    let (mut bunny, camera) = builtin("bunny", 160, 120);
+    bunny.area_light = Some(AreaLight::sized(&bunny.light.unwrap(), 3.0).unwrap());
+    let scenes = [
+        ("penumbra", builtin("penumbra", 160, 120)),
+        ("room-soft", builtin("room-soft", 160, 120)),
+        ("bunny", (bunny, camera)),
+    ];
+    for (name, (scene, camera)) in &scenes {
+        let pcf = soft_error(scene, camera, "pcf", 256);
+        let pcss = soft_error(scene, camera, "pcss", 256);
+        eprintln!("{name}: pcf {pcf:.5}, pcss {pcss:.5}");
+        assert!(pcss < pcf, "{name}: pcss {pcss} is not below pcf {pcf}");
+    }
+}
+
+#[test]
+fn soft_filtered_maps_follow_the_penumbra() {
+    // Each soft variant is closer to the area-light reference than its hard-filtered base.
+    let (scene, camera) = builtin("penumbra", 128, 96);
+    for base in ["vsm", "csm"] {
+        let hard = soft_error(&scene, &camera, base, 256);
+        let soft = soft_error(&scene, &camera, &format!("{base}-soft"), 256);
+        eprintln!("{base}: {hard:.5}, {base}-soft: {soft:.5}");
+        assert!(soft < hard, "{base}-soft {soft} is not below {base} {hard}");
+    }
+}
