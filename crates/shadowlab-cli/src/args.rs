@@ -73,9 +73,20 @@ pub struct SceneArgs {
     /// node hierarchy is walked (0 = the first).
     #[arg(long = "camera-index", value_name = "N", default_value_t = 0)]
     pub camera_index: usize,
-    /// Light override: `directional:DX,DY,DZ`, `point:X,Y,Z` or `spot:X,Y,Z:TX,TY,TZ:FOV_DEG`.
+    /// Light override: `directional:DX,DY,DZ`, `point:X,Y,Z` or `spot:X,Y,Z:TX,TY,TZ:FOV_DEG`;
+    /// area lights `rect:X,Y,Z:UX,UY,UZ:VX,VY,VZ` (centre, two full edges),
+    /// `disk:X,Y,Z:NX,NY,NZ:R` (centre, normal, radius) or `sphere:X,Y,Z:R`.
     #[arg(long)]
     pub light: Option<String>,
+    /// Give the punctual light a size, making it an area light: a point light a sphere of
+    /// radius S, a spot light a disk of radius S facing its target, a directional light a
+    /// sun of angular diameter S degrees.
+    #[arg(long = "light-size", value_name = "S", allow_negative_numbers = true)]
+    pub light_size: Option<f32>,
+    /// Light samples per pixel of the area-light reference and of the soft techniques
+    /// that sample the light (1..=65536).
+    #[arg(long = "light-samples", value_name = "N", default_value_t = 256)]
+    pub light_samples: u32,
     /// Render the camera path (or a still camera) this many times; reports describe the last.
     #[arg(long, default_value_t = 1)]
     pub frames: usize,

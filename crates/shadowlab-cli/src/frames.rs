@@ -55,7 +55,8 @@ impl Pass {
         index: usize,
         dump: Option<&'a dyn DumpSink>,
     ) -> Frame<'a> {
-        let mut frame = Frame::new(&setup.scene, &self.camera, &setup.light, &self.view);
+        let mut frame = Frame::new(&setup.scene, &self.camera, &setup.light, &self.view)
+            .with_area(setup.area.as_ref(), setup.light_samples);
         if let Some(l) = &self.layers {
             frame = frame.with_layers(l);
         }

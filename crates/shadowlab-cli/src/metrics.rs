@@ -11,6 +11,7 @@ use crate::config::Setup;
 use serde::de::{MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use shadowlab::area_light::AreaLight;
 use shadowlab::camera::Camera;
 use shadowlab::light::Light;
 use shadowlab::math::Vec3;
@@ -199,6 +200,26 @@ impl From<&Light> for LightRecord {
     }
 }
 
+/// An area light and the light samples per pixel the reference took.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct AreaRecord {
+    /// The light, tagged by `kind` (`rect`, `disk`, `sphere`, `distant`).
+    #[serde(flatten)]
+    pub light: AreaLight,
+    /// Light samples per pixel (`--light-samples`).
+    pub light_samples: u32,
+}
+
+impl AreaRecord {
+    /// The area light of a run, if it has one.
+    pub fn of(setup: &Setup) -> Option<AreaRecord> {
+        setup.area.map(|light| AreaRecord {
+            light,
+            light_samples: setup.light_samples,
+        })
+    }
+}
+
 /// The scene a record was computed from.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SceneRecord {
@@ -256,6 +277,10 @@ pub struct Metrics {
     pub reference: ReferenceSummary,
     /// Every reference traced, the most samples first.
     pub references: Vec<ReferenceImage>,
+    /// Under an area light: the light and its samples per pixel (`light` is then the
+    /// punctual stand-in at its centre that hard techniques use).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub area_light: Option<AreaRecord>,
     /// One element per technique (and per `--sweep` value).
     pub results: Vec<RunResult>,
     /// With `--dump`, the folder of intermediate images.
@@ -294,6 +319,13 @@ pub struct ReferenceImage {
     pub image: String,
     /// Share of covered pixels whose shadow term is below 0.5.
     pub shadowed_share: f64,
+    /// Under an area light: its mean per-pixel standard error over covered pixels.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean_std_error: Option<f64>,
+    /// Under an area light: its standard-error image (brightness ∝ √error, as the error
+    /// images).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub std_error_image: Option<String>,
 }
 
 /// One technique run of `compare`: `metrics.json`'s `results[]`.
@@ -316,6 +348,10 @@ pub struct RunResult {
     pub mean_abs_error_rgb: f64,
     /// Samples per pixel of the reference this verdict is measured against.
     pub reference_spp: u32,
+    /// Under an area light: that reference's mean per-pixel standard error over covered
+    /// pixels (an upper bound on its own noise; see `shadowlab::soft_reference`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_std_error: Option<f64>,
     /// Frames the technique rendered.
     pub frames_run: usize,
     /// For a progressive technique, whether it had converged.
@@ -398,6 +434,9 @@ pub struct RenderStats {
     pub camera: CameraRecord,
     /// The resolved light.
     pub light: LightRecord,
+    /// Under an area light: the light and its samples per pixel.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub area_light: Option<AreaRecord>,
     /// The camera pass of the last frame.
     pub camera_pass_ms: f64,
     /// Pixels whose centre a surface covers.
@@ -468,6 +507,7 @@ mod tests {
             mean_abs_error: 0.002,
             mean_abs_error_rgb: 0.002,
             reference_spp: 1,
+            reference_std_error: None,
             frames_run: 1,
             converged: None,
             layer_samples: None,

@@ -19,11 +19,13 @@ use shadowlab::frame::{Frame, Visibility};
 use shadowlab::math::Vec3;
 use shadowlab::picture::{self, RgbImage};
 use shadowlab::reference::Reference;
+use shadowlab::soft_reference::soft_visibility;
 use shadowlab::temporal::Reprojection;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// One traced reference: samples per pixel, the shadow term, the trace time.
+/// One traced reference: samples per pixel, the shadow term, the trace time and, under an
+/// area light, its per-pixel standard error and their mean.
 pub struct Traced {
     /// Primary rays per pixel.
     pub spp: u32,
@@ -31,6 +33,8 @@ pub struct Traced {
     pub vis: Visibility,
     /// Its trace time in milliseconds.
     pub ms: f64,
+    /// Under an area light: each pixel's standard error, and their mean over covered pixels.
+    pub std_error: Option<(Vec<f32>, f64)>,
 }
 
 /// The references of one frame, the most samples first, with the BVH build time, their
@@ -49,7 +53,8 @@ pub struct References {
 impl References {
     /// Traces every planned reference on the frame of `pass` through `reference`.
     pub fn trace(reference: &Reference, setup: &Setup, pass: &Pass, plan: &ReferencePlan) -> Self {
-        let frame = Frame::new(&setup.scene, &pass.camera, &setup.light, &pass.view);
+        let frame = Frame::new(&setup.scene, &pass.camera, &setup.light, &pass.view)
+            .with_area(setup.area.as_ref(), setup.light_samples);
         let t0 = Instant::now();
         let each = plan
             .spps
@@ -57,11 +62,20 @@ impl References {
             .zip(&plan.samples)
             .map(|(&spp, samples)| {
                 let t = Instant::now();
-                let vis = reference.visibility(&frame, samples);
+                let (vis, std_error) = match &setup.area {
+                    Some(area) => {
+                        let n = setup.light_samples;
+                        let soft = soft_visibility(reference, &frame, area, n, samples);
+                        let mean = soft.mean_std_error(&frame);
+                        (soft.visibility, Some((soft.std_error, mean)))
+                    }
+                    None => (reference.visibility(&frame, samples), None),
+                };
                 Traced {
                     spp,
                     vis,
                     ms: t.elapsed().as_secs_f64() * 1e3,
+                    std_error,
                 }
             })
             .collect();
@@ -79,13 +93,16 @@ impl References {
     }
 
     /// The reference traced with `spp` samples per pixel.
-    pub fn with_spp(&self, spp: u32) -> &Visibility {
-        &self
-            .each
+    pub fn traced(&self, spp: u32) -> &Traced {
+        self.each
             .iter()
             .find(|r| r.spp == spp)
             .expect("every planned reference is traced")
-            .vis
+    }
+
+    /// The shadow term of the reference traced with `spp` samples per pixel.
+    pub fn with_spp(&self, spp: u32) -> &Visibility {
+        &self.traced(spp).vis
     }
 
     /// The shaded image of the reference with `spp` samples per pixel.

@@ -282,8 +282,16 @@ fn every_metrics_field_is_documented_and_every_always_field_is_written() {
     let d = tmp("metrics");
     let size = ["--width", "64", "--height", "48"];
     let mut outputs = Vec::new();
-    let variants: [&[&str]; 3] = [
+    let variants: [&[&str]; 4] = [
         &["--scene", "room", "--techniques", "all"],
+        &[
+            "--scene",
+            "penumbra",
+            "--techniques",
+            "sm,pcf",
+            "--light-samples",
+            "16",
+        ],
         &[
             "--scene",
             "room",
@@ -321,8 +329,16 @@ fn every_metrics_field_is_documented_and_every_always_field_is_written() {
 fn every_stats_field_is_documented_and_every_always_field_is_written() {
     let d = tmp("stats");
     let mut outputs = Vec::new();
-    let variants: [&[&str]; 3] = [
+    let variants: [&[&str]; 4] = [
         &["--scene", "room", "--technique", "sm"],
+        &[
+            "--scene",
+            "penumbra",
+            "--technique",
+            "sm",
+            "--light-samples",
+            "16",
+        ],
         &["--scene", "room", "--technique", "asm", "--frames", "2"],
         &[
             "--scene",

@@ -7,6 +7,7 @@
 //! with [`Stats`]. Intermediate images a technique can show (its shadow map, tree, tiles)
 //! go to the frame's [`DumpSink`]: a folder of PNGs on the command line, memory in tests.
 
+use crate::area_light::AreaLight;
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::light::Light;
@@ -26,8 +27,15 @@ pub struct Frame<'a> {
     pub scene: &'a Scene,
     /// The camera of this frame.
     pub camera: &'a Camera,
-    /// The light.
+    /// The light: the punctual one, or an area light's punctual stand-in (its centre),
+    /// which hard techniques use.
     pub light: &'a Light,
+    /// The area light, when the light has an area: the soft-shadow reference and the
+    /// soft techniques read it (see [`crate::area_light`]).
+    pub area: Option<&'a AreaLight>,
+    /// Light samples per point under an area light (see
+    /// [`crate::area_light::light_samples`]).
+    pub light_samples: u32,
     /// The camera pass.
     pub view: &'a ViewSamples,
     /// Frame number within a sequence (0 for a still).
@@ -52,6 +60,8 @@ impl<'a> Frame<'a> {
             scene,
             camera,
             light,
+            area: None,
+            light_samples: crate::area_light::DEFAULT_LIGHT_SAMPLES,
             view,
             index: 0,
             dump: None,
@@ -63,6 +73,16 @@ impl<'a> Frame<'a> {
     pub fn with_layers(self, layers: &'a ViewLayers) -> Self {
         Frame {
             layers: Some(layers),
+            ..self
+        }
+    }
+
+    /// The same frame under the area light `area` (whose stand-in `light` already is),
+    /// with `samples` light samples per point.
+    pub fn with_area(self, area: Option<&'a AreaLight>, samples: u32) -> Self {
+        Frame {
+            area,
+            light_samples: samples,
             ..self
         }
     }

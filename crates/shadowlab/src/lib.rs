@@ -44,6 +44,7 @@
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod area_light;
 pub mod auto_light;
 pub mod bvh;
 pub mod camera;
@@ -67,6 +68,7 @@ pub mod reference;
 pub mod sampling;
 pub mod scene;
 pub mod shade;
+pub mod soft_reference;
 pub mod techniques;
 pub mod temporal;
 pub mod view;

@@ -117,6 +117,12 @@ impl Light {
         if dist.is_nan() || dist <= 0.0 || n.dot(l) <= 0.0 {
             return false;
         }
+        self.cone_contains(l)
+    }
+
+    /// Whether the unit direction `l` towards the light (from a scene point) lies inside a
+    /// spot light's cone; true for the other kinds.
+    pub fn cone_contains(&self, l: Vec3) -> bool {
         match *self {
             Light::Spot {
                 position,

@@ -217,11 +217,7 @@ impl<'s> Reference<'s> {
                         for s in samples {
                             let d = rays.direction(x as f32 + s.x, y as f32 + s.y);
                             if let Some(hit) = self.closest_hit(eye, d) {
-                                let v = self.scene.triangle(hit.triangle as usize);
-                                let mut n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
-                                if n.dot(d) > 0.0 {
-                                    n = -n;
-                                }
+                                let n = facing_normal(self.scene, hit.triangle, d);
                                 sum += self.transmittance(light, &hit.point, n, hit.triangle);
                                 count += 1;
                             }
@@ -260,6 +256,18 @@ impl Reference<'_> {
                 )
             })
             .collect()
+    }
+}
+
+/// The unit face normal of triangle `tri` turned against the ray direction `d` (towards
+/// the viewer).
+pub fn facing_normal(scene: &Scene, tri: u32, d: Vec3) -> Vec3 {
+    let v = scene.triangle(tri as usize);
+    let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+    if n.dot(d) > 0.0 {
+        -n
+    } else {
+        n
     }
 }
 

@@ -112,6 +112,20 @@ pub fn error_image(view: &ViewSamples, vis: &Visibility, reference: &Visibility)
     })
 }
 
+/// A reference's per-pixel standard error on the error images' scale (brightness ∝
+/// √error), in yellow; uncovered pixels grey.
+pub fn std_error_image(view: &ViewSamples, std_error: &[f32]) -> RgbImage {
+    let (w, h) = (view.width, view.height);
+    ImageBuffer::from_fn(w, h, |x, y| {
+        let k = (y * w + x) as usize;
+        if !view.covered(k) {
+            return Rgb([40, 40, 40]);
+        }
+        let m = (std_error[k].max(0.0).sqrt().min(1.0) * 255.0) as u8;
+        Rgb([m, m, 0])
+    })
+}
+
 /// Writes the raw shadow term as a float32 RGBA OpenEXR: R, G, B = transmittance towards
 /// the light (1 = lit), A = coverage (1 where a surface covers the pixel centre).
 pub fn write_visibility_exr(path: &Path, view: &ViewSamples, vis: &Visibility) -> Result<()> {

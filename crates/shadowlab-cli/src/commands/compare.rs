@@ -11,8 +11,8 @@
 use crate::config::{CompareConfig, ReferencePlan, Setup};
 use crate::frames::{Pass, Run, MAX_STILL_FRAMES};
 use crate::metrics::{
-    self, CameraRecord, Figures, LightRecord, Metrics, ReferenceImage, ReferenceSummary, RunResult,
-    SceneRecord, Sweep,
+    self, AreaRecord, CameraRecord, Figures, LightRecord, Metrics, ReferenceImage,
+    ReferenceSummary, RunResult, SceneRecord, Sweep,
 };
 use crate::output::{self, slug};
 use crate::sequence::{mean_temporal_error, walkthrough_file, References, Sequence};
@@ -171,11 +171,22 @@ fn write_references(
             picture::save_png(&img, &folder.dir.join(&name))?;
             name
         };
+        let std_error_image = match &r.std_error {
+            Some((se, _)) => {
+                let name = format!("reference-{}spp-std-error.png", r.spp);
+                let img = shade::std_error_image(&pass.view, se);
+                picture::save_png(&img, &folder.dir.join(&name))?;
+                Some(name)
+            }
+            None => None,
+        };
         records.push(ReferenceImage {
             samples_per_pixel: r.spp,
             trace_ms: r.ms,
             image,
             shadowed_share: shadowed_share(&pass.view, &r.vis),
+            mean_std_error: r.std_error.as_ref().map(|s| s.1),
+            std_error_image,
         });
     }
     Ok((first, records))
@@ -196,7 +207,8 @@ impl Measured<'_> {
     fn result(&self, run: &Run, spp: u32) -> Result<RunResult> {
         let (s, ms) = run.result();
         let view = &self.pass.view;
-        let ref_vis = self.traced.with_spp(spp);
+        let traced = self.traced.traced(spp);
+        let ref_vis = &traced.vis;
         let m = measure(view, &s.visibility, ref_vis);
         let file = slug(&run.label);
         let shaded = self.pass.shade(self.setup, s);
@@ -226,6 +238,7 @@ impl Measured<'_> {
             mean_abs_error: m.mean_abs_error,
             mean_abs_error_rgb: m.mean_abs_error_rgb,
             reference_spp: spp,
+            reference_std_error: traced.std_error.as_ref().map(|s| s.1),
             frames_run: run.frames.len(),
             converged: run.technique.converged(),
             layer_samples: layers.as_ref().map(|l| l.0),
@@ -277,6 +290,7 @@ fn gather(
         shadowlab_version: metrics::VERSION.to_string(),
         camera: CameraRecord::from(&pass.camera),
         light: LightRecord::from(&setup.light),
+        area_light: AreaRecord::of(setup),
         reference: ReferenceSummary {
             technique: "raytrace".to_string(),
             samples_per_pixel: plan.spps[0],
@@ -311,22 +325,34 @@ fn print_table(m: &Metrics) {
         m.scene.scene, m.scene.triangles, m.width, m.height, m.covered_pixels, m.camera_pass_ms, r.time_ms, r.bvh_build_ms, r.trace_ms
     );
     println!(
-        "{:<28} {:>10} {:>10} {:>10} {:>8} {:>8}",
-        "technique", "time ms", "mismatch", "mean err", "ref spp", "frames"
+        "{:<28} {:>10} {:>10} {:>10} {:>8} {:>8} {:>8}",
+        "technique", "time ms", "mismatch", "mean err", "ref spp", "ref σ", "frames"
     );
     for run in &m.results {
         let frames = match run.converged {
             None => String::new(),
             Some(c) => format!("{}{}", run.frames_run, if c { "" } else { " (cap)" }),
         };
+        let sigma = run
+            .reference_std_error
+            .map_or("—".to_string(), |s| format!("{s:.5}"));
         println!(
-            "{:<28} {:>10.2} {:>9.4}% {:>10.5} {:>8} {:>8}",
+            "{:<28} {:>10.2} {:>9.4}% {:>10.5} {:>8} {:>8} {:>8}",
             run.label,
             run.figures.time_ms,
             run.mismatch_rate * 100.0,
             run.mean_abs_error,
             run.reference_spp,
+            sigma,
             frames
+        );
+    }
+    if let Some(a) = &m.area_light {
+        println!(
+            "area light ({}, {} light samples per pixel): the reference is the fraction of the light each point sees; \
+             \"ref σ\" is its mean standard error; hard techniques see the light's centre as a point light",
+            a.light.kind(),
+            a.light_samples
         );
     }
     println!(

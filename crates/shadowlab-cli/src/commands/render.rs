@@ -7,7 +7,9 @@
 
 use crate::config::{RenderConfig, RenderOutputs, Setup};
 use crate::frames::{Pass, Run};
-use crate::metrics::{self, CameraRecord, Figures, LightRecord, RenderStats, SceneRecord};
+use crate::metrics::{
+    self, AreaRecord, CameraRecord, Figures, LightRecord, RenderStats, SceneRecord,
+};
 use crate::output::{self, Animation};
 use crate::progress;
 use anyhow::{Context, Result};
@@ -100,6 +102,7 @@ fn stats(setup: &Setup, run: &Run, pass: &Pass) -> RenderStats {
         shadowlab_version: metrics::VERSION.to_string(),
         camera: CameraRecord::from(&pass.camera),
         light: LightRecord::from(&setup.light),
+        area_light: AreaRecord::of(setup),
         camera_pass_ms: pass.view.time_ms,
         covered_pixels: pass.view.covered_count(),
         layer_samples: layers.map(|l| l.len()),

@@ -5,6 +5,7 @@ use super::parse::{parse_kvs, parse_vec3};
 use crate::args::SceneArgs;
 use crate::failure::{bad_input, InputContext};
 use anyhow::{Context, Result};
+use shadowlab::area_light::{self, AreaLight};
 use shadowlab::auto_light;
 use shadowlab::camera::Camera;
 use shadowlab::light::Light;
@@ -18,8 +19,13 @@ pub struct Setup {
     pub scene: Scene,
     /// The camera of the first frame (its depth range not yet fitted).
     pub camera: Camera,
-    /// The light.
+    /// The light: the punctual one, or the area light's punctual stand-in that hard
+    /// techniques use (its centre).
     pub light: Light,
+    /// The area light, when the light has an area.
+    pub area: Option<AreaLight>,
+    /// Light samples per pixel under an area light (`--light-samples`).
+    pub light_samples: u32,
     /// Frames to render.
     pub frames: usize,
     /// Whether the layers behind semi-transparent surfaces are shaded too.
@@ -74,9 +80,37 @@ impl Setup {
     }
 }
 
-/// Parses a `--light` value.
-pub fn parse_light(s: &str) -> Result<Light> {
+/// Parses a `--light` value: a punctual light, or an area light with its punctual
+/// stand-in.
+pub fn parse_light(s: &str) -> Result<(Light, Option<AreaLight>)> {
     let parts: Vec<&str> = s.split(':').collect();
+    let number = |f: &str, what: &str| -> Result<f32> {
+        f.trim()
+            .parse()
+            .input_context(|| format!("--light {what} {f:?} is not a number"))
+    };
+    let area = match parts.as_slice() {
+        ["rect", c, u, v] => Some(AreaLight::Rect {
+            centre: parse_vec3(c, "--light centre")?,
+            edge_u: parse_vec3(u, "--light edge")?,
+            edge_v: parse_vec3(v, "--light edge")?,
+        }),
+        ["disk", c, n, r] => Some(AreaLight::Disk {
+            centre: parse_vec3(c, "--light centre")?,
+            normal: parse_vec3(n, "--light normal")?,
+            radius: number(r, "radius")?,
+        }),
+        ["sphere", c, r] => Some(AreaLight::Sphere {
+            centre: parse_vec3(c, "--light centre")?,
+            radius: number(r, "radius")?,
+        }),
+        _ => None,
+    };
+    if let Some(a) = area {
+        a.validate().context("--light")?;
+        let a = a.normalized();
+        return Ok((a.punctual(), Some(a)));
+    }
     let light = match parts.as_slice() {
         ["directional", d] => Light::Directional {
             to_light: parse_vec3(d, "--light direction")?,
@@ -94,12 +128,37 @@ pub fn parse_light(s: &str) -> Result<Light> {
         },
         _ => {
             return Err(bad_input(format!(
-            "--light {s:?} is not directional:DX,DY,DZ, point:X,Y,Z or spot:X,Y,Z:TX,TY,TZ:FOV_DEG"
+            "--light {s:?} is not directional:DX,DY,DZ, point:X,Y,Z, spot:X,Y,Z:TX,TY,TZ:FOV_DEG, \
+             rect:X,Y,Z:UX,UY,UZ:VX,VY,VZ, disk:X,Y,Z:NX,NY,NZ:R or sphere:X,Y,Z:R"
         )))
         }
     };
     light.validate().context("--light")?;
-    Ok(light.normalized())
+    Ok((light.normalized(), None))
+}
+
+/// The light of a run: `--light` or the scene's, sized by `--light-size` when given.
+fn resolve_light(
+    args: &SceneArgs,
+    scene: &Scene,
+    camera: &Camera,
+) -> Result<(Light, Option<AreaLight>)> {
+    let (light, area) = match &args.light {
+        Some(l) => parse_light(l)?,
+        None => (scene_light(scene, camera)?, scene.area_light),
+    };
+    let Some(size) = args.light_size else {
+        return Ok((light, area));
+    };
+    if let Some(a) = area {
+        return Err(bad_input(format!(
+            "--light-size {size} sizes a punctual light, and the light is already a {} area light",
+            a.kind()
+        )));
+    }
+    let a = AreaLight::sized(&light.normalized(), size)
+        .map_err(|e| bad_input(format!("--light-size {size}: {e}")))?;
+    Ok((light, Some(a)))
 }
 
 /// Loads the scene of `args` and applies every override: the image size, camera and
@@ -126,10 +185,9 @@ pub fn resolve(args: &SceneArgs) -> Result<Setup> {
         s.camera.expect("place_camera sets a camera")
     });
     apply_camera_flags(args, &mut camera)?;
-    let light = match &args.light {
-        Some(l) => parse_light(l)?,
-        None => scene_light(&scene, &camera)?,
-    };
+    area_light::check_light_samples(args.light_samples)
+        .map_err(|e| bad_input(format!("--light-samples: {e}")))?;
+    let (light, area) = resolve_light(args, &scene, &camera)?;
     light
         .validate()
         .with_context(|| format!("the light of {}", args.scene))?;
@@ -138,6 +196,8 @@ pub fn resolve(args: &SceneArgs) -> Result<Setup> {
         scene,
         camera,
         light: light.normalized(),
+        area,
+        light_samples: args.light_samples,
         frames: args.frames,
         layers: args.layers,
         source: args.scene.clone(),

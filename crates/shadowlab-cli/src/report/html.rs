@@ -166,6 +166,16 @@ fn images(o: &mut String, m: &Metrics) {
          <figure class=\"ref\"><a href=\"{0}\"><img src=\"{0}\" alt=\"reference\"></a><figcaption>reference (ray traced)</figcaption></figure>",
         esc(&url(&m.reference.image))
     );
+    for r in m.references.iter().filter(|r| r.std_error_image.is_some()) {
+        let _ = write!(
+            o,
+            "<figure class=\"ref\"><a href=\"{0}\"><img src=\"{0}\" alt=\"reference standard error\"></a>\
+             <figcaption>reference standard error, {1} spp: mean {2:.5} (yellow, brightness ∝ √σ)</figcaption></figure>",
+            esc(&url(r.std_error_image.as_deref().unwrap_or_default())),
+            r.samples_per_pixel,
+            r.mean_std_error.unwrap_or(0.0)
+        );
+    }
     for r in &m.results {
         let bx = match &r.worst_region {
             Some(g) if w > 0.0 && h > 0.0 => format!(
@@ -181,14 +191,16 @@ fn images(o: &mut String, m: &Metrics) {
             o,
             "<figure><div class=\"pair\"><a class=\"frame\" href=\"{0}\"><img src=\"{0}\" alt=\"{2}\">{3}</a>\
              <a class=\"frame\" href=\"{1}\"><img src=\"{1}\" alt=\"{2} error\">{3}</a></div>\
-             <figcaption>{2} — {4:.2} ms, mismatch {5:.3}%, mean error {6:.4}</figcaption></figure>",
+             <figcaption>{2} — {4:.2} ms, mismatch {5:.3}%, mean error {6:.4}{7}</figcaption></figure>",
             esc(&url(&r.image)),
             esc(&url(&r.error_image)),
             esc(&r.label),
             bx,
             r.figures.time_ms,
             r.mismatch_rate * 100.0,
-            r.mean_abs_error
+            r.mean_abs_error,
+            r.reference_std_error
+                .map_or(String::new(), |s| format!(" (reference σ {s:.5})"))
         );
     }
     o.push_str("</div></section>\n");

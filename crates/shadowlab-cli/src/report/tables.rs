@@ -137,10 +137,13 @@ fn stages(r: &RunResult) -> (String, String) {
     (bar, text.join(" "))
 }
 
-/// Under a technique's name: the reference its verdict used and, for a progressive
-/// technique, how many frames it had.
+/// Under a technique's name: the reference its verdict used (under an area light, with
+/// its mean standard error) and, for a progressive technique, how many frames it had.
 fn verdict_note(r: &RunResult) -> String {
-    let mut parts = vec![format!("vs {} spp", r.reference_spp)];
+    let mut parts = vec![match r.reference_std_error {
+        Some(se) => format!("vs {} spp (σ {se:.5})", r.reference_spp),
+        None => format!("vs {} spp", r.reference_spp),
+    }];
     if let Some(c) = r.converged {
         let n = r.frames_run;
         parts.push(if c {

@@ -33,6 +33,7 @@ pub mod ply;
 mod repeats;
 pub mod toml;
 
+use crate::area_light::AreaLight;
 use crate::camera::{Camera, CameraPath, AUTO_VIEW_DIRECTION};
 use crate::error::{Error, Result};
 use crate::files;
@@ -159,8 +160,11 @@ pub struct Scene {
     pub camera: Option<Camera>,
     /// A key-framed camera path for walkthroughs.
     pub camera_path: Option<CameraPath>,
-    /// The scene's own light, if it has one.
+    /// The scene's own light, if it has one; under an area light, its punctual stand-in.
     pub light: Option<Light>,
+    /// The scene's area light, if its light has an area (`light` is then
+    /// [`AreaLight::punctual`] of it, or the punctual light it was sized from).
+    pub area_light: Option<AreaLight>,
     /// What the loader skipped or approximated, one sentence per kind (e.g. "bike.obj:
     /// skipped 201 faces with fewer than 3 vertices"), in the order met.
     pub warnings: Vec<String>,

@@ -12,6 +12,7 @@ pub mod convolution;
 pub mod filtering;
 pub mod lispsm;
 pub mod moments;
+pub mod pcss;
 pub mod perspective;
 pub mod raytrace;
 pub mod shadow_map;
@@ -30,8 +31,13 @@ use crate::error::{Error, Result};
 /// Every technique name, in the order reports list them.
 pub const ALL: &[&str] = &[
     "raytrace", "sm", "pcf", "psm", "asm", "afsm", "subpixel", "csm", "vsm", "evsm", "msm",
-    "cascaded", "lispsm",
+    "cascaded", "lispsm", "pcss",
 ];
+
+/// The soft variants of the filtered maps: `vsm`, `evsm`, `msm` and `csm` with `soft=true`
+/// (each pixel's filter sized by a blocker search under the area light). They share
+/// their base technique's parameter table.
+pub const SOFT_VARIANTS: &[&str] = &["vsm-soft", "evsm-soft", "msm-soft", "csm-soft"];
 
 /// A technique by name, with default parameters.
 pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
@@ -49,10 +55,18 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
         "msm" => Box::new(moments::msm::MomentShadowMap::default()),
         "cascaded" => Box::new(cascaded::Cascaded::default()),
         "lispsm" => Box::new(lispsm::LightSpacePerspective::default()),
+        "pcss" => Box::new(pcss::Pcss::default()),
+        // The soft filtered variants: the same techniques with `soft=true`.
+        "vsm-soft" | "evsm-soft" | "msm-soft" | "csm-soft" => {
+            let mut t = create(name.trim_end_matches("-soft"))?;
+            t.set_param("soft", "true")?;
+            t
+        }
         _ => {
             return Err(Error::param(format!(
-                "unknown technique {name:?}: known techniques are {}",
-                ALL.join(", ")
+                "unknown technique {name:?}: known techniques are {}, {}",
+                ALL.join(", "),
+                SOFT_VARIANTS.join(", ")
             )))
         }
     })

@@ -1,6 +1,8 @@
 //! `raytrace`: the ray-traced reference as a technique, so its cost sits in the same
 //! tables as the others. See [`crate::reference`] for how rays are traced. The layers
-//! behind semi-transparent surfaces ([`Frame::layers`]) get one shadow ray each.
+//! behind semi-transparent surfaces ([`Frame::layers`]) get one shadow ray each. Under an
+//! area light ([`Frame::area`]) it is the soft-shadow reference of
+//! [`crate::soft_reference`], with the frame's light samples per pixel.
 
 use super::{find_param, Frame, ParamSpec, ShadowTechnique, Shadows, Stats};
 use crate::error::Result;
@@ -18,6 +20,15 @@ pub struct RayTrace {
 impl Default for RayTrace {
     fn default() -> Self {
         RayTrace { spp: 1 }
+    }
+}
+
+/// Shadow rays a pixel costs: `spp`, or under an area light the larger of `spp` and the
+/// light samples (see [`crate::soft_reference`]).
+fn rays_per_pixel(frame: &Frame, spp: u32) -> f64 {
+    match frame.area {
+        Some(_) => spp.max(frame.light_samples) as f64,
+        None => spp as f64,
     }
 }
 
@@ -51,7 +62,19 @@ impl ShadowTechnique for RayTrace {
         let mut stats = Stats::default();
         let reference = stats.stage("bvh_build", || Reference::build(frame.scene));
         let samples = pattern(PatternKind::Grid, self.spp)?;
-        let visibility = stats.stage("trace", || reference.visibility(frame, &samples));
+        let visibility = stats.stage("trace", || match frame.area {
+            Some(area) => {
+                crate::soft_reference::soft_visibility(
+                    &reference,
+                    frame,
+                    area,
+                    frame.light_samples,
+                    &samples,
+                )
+                .visibility
+            }
+            None => reference.visibility(frame, &samples),
+        });
         stats.memory_bytes = reference.memory_bytes() as u64;
         let layers = frame
             .layers
@@ -59,7 +82,7 @@ impl ShadowTechnique for RayTrace {
         let layer_rays = frame.layers.map_or(0, |l| l.len());
         stats.count(
             "rays",
-            frame.view.covered_count() as f64 * self.spp as f64 + layer_rays as f64,
+            frame.view.covered_count() as f64 * rays_per_pixel(frame, self.spp) + layer_rays as f64,
         );
         Ok(Shadows {
             layers,

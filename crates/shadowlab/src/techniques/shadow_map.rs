@@ -229,6 +229,25 @@ pub fn lookup_nearest(map: &DepthBuffer, u: f32, v: f32, depth: f32) -> f32 {
     }
 }
 
+/// One bilinearly weighted 2×2 comparison of `depth` with the texels `(x, y)` to
+/// `(x + 1, y + 1)` (clamped to the map), weights `ax`, `ay` towards the second ones.
+#[inline]
+pub fn bilinear_compare(map: &DepthBuffer, x: i64, y: i64, ax: f32, ay: f32, depth: f32) -> f32 {
+    let n = map.width as i64;
+    let test = |x: i64, y: i64| -> f32 {
+        let x = x.clamp(0, n - 1);
+        let y = y.clamp(0, n - 1);
+        if depth > map.depth[(y * n + x) as usize] {
+            0.0
+        } else {
+            1.0
+        }
+    };
+    let top = test(x, y) * (1.0 - ax) + test(x + 1, y) * ax;
+    let bottom = test(x, y + 1) * (1.0 - ax) + test(x + 1, y + 1) * ax;
+    top * (1.0 - ay) + bottom * ay
+}
+
 /// PCF look-up: `kernel × kernel` bilinearly weighted 2×2 comparisons around `(u, v)`.
 #[inline]
 pub fn lookup_pcf(map: &DepthBuffer, u: f32, v: f32, depth: f32, kernel: u32) -> f32 {
@@ -242,22 +261,9 @@ pub fn lookup_pcf(map: &DepthBuffer, u: f32, v: f32, depth: f32, kernel: u32) ->
     let r = (kernel as i64 - 1) / 2;
     let k = kernel as i64;
     let mut sum = 0.0;
-    let test = |x: i64, y: i64| -> f32 {
-        let x = x.clamp(0, n - 1);
-        let y = y.clamp(0, n - 1);
-        if depth > map.depth[(y * n + x) as usize] {
-            0.0
-        } else {
-            1.0
-        }
-    };
     for dy in -r..k - r {
         for dx in -r..k - r {
-            let x = x0 as i64 + dx;
-            let y = y0 as i64 + dy;
-            let top = test(x, y) * (1.0 - ax) + test(x + 1, y) * ax;
-            let bottom = test(x, y + 1) * (1.0 - ax) + test(x + 1, y + 1) * ax;
-            sum += top * (1.0 - ay) + bottom * ay;
+            sum += bilinear_compare(map, x0 as i64 + dx, y0 as i64 + dy, ax, ay, depth);
         }
     }
     sum / (kernel * kernel) as f32

@@ -14,7 +14,7 @@
 //! One module a scene family, each saying where it departs from its paper's description
 //! and why: `bunny` (`bunny`, `bunny-closeup`), `random_triangles`, `chessboard`,
 //! `hairball`, `fence` (`fence`, `fence-far`), `fence_leak`, `cage`, `bumpy`, `room`,
-//! `street`. Beside them: `params` (the checked parameters), `rng` (the seeded generator)
+//! `street`, `penumbra` (`penumbra`, `room-soft`, `chessboard-soft`: area lights). Beside them: `params` (the checked parameters), `rng` (the seeded generator)
 //! and [`shapes`], the geometry generators ([`add_quad`], [`add_plane`], [`add_box`],
 //! [`add_sphere`], [`add_cylinder`], [`add_scene`], …), public so that other scene
 //! builders (the TOML format's generators among them) can use them.
@@ -27,6 +27,7 @@ mod fence;
 mod fence_leak;
 mod hairball;
 mod params;
+mod penumbra;
 mod random_triangles;
 mod rng;
 mod room;
@@ -98,6 +99,18 @@ const SCENES: &[(&str, &str)] = &[
         "room with the bunny, a teapot on a table, boxes, a sphere and a rod sculpture; 122° light on the ceiling and a walkthrough (adaptive shadow maps)",
     ),
     (
+        "penumbra",
+        "a pole, a box and a sphere at increasing heights over a plane under a rectangular area light: contact-hardening soft shadows",
+    ),
+    (
+        "room-soft",
+        "the room under a 0.6 m square ceiling panel where its spot light hangs (soft shadows)",
+    ),
+    (
+        "chessboard-soft",
+        "the chess set under its spot light given a disk of radius 4 (soft shadows, the cone kept)",
+    ),
+    (
         "street",
         "long street of buildings, lamp posts and cars to the horizon, sun perpendicular to the view, with a camera path dollying sideways across it (perspective shadow maps, Fig. 9)",
     ),
@@ -127,6 +140,9 @@ pub fn generate(name: &str, params: &BTreeMap<String, String>) -> Result<Scene> 
         "cage" => cage::build(&Params::new(name, params, &["bars"])?)?,
         "bumpy" => bumpy::build(&Params::new(name, params, &["resolution"])?)?,
         "room" => room::build(&Params::new(name, params, &["light"])?)?,
+        "penumbra" => penumbra::build(&Params::new(name, params, &[])?)?,
+        "room-soft" => penumbra::build_room(&Params::new(name, params, &["light"])?)?,
+        "chessboard-soft" => penumbra::build_chess(&Params::new(name, params, &[])?)?,
         "street" => street::build(&Params::new(name, params, &["length", "seed"])?)?,
         _ => {
             let names: Vec<&str> = SCENES.iter().map(|s| s.0).collect();

@@ -29,6 +29,11 @@
 //! fov_deg = 60.0                   # spot: full cone angle
 //! # A directional light takes `direction` (where the light travels) or `to_light`
 //! # (towards the light), e.g. kind = "directional", to_light = [0.3, 1.0, 0.2].
+//! # size = 0.2                     # any of the three: becomes an area light (a point a
+//! #                                # sphere of that radius, a spot a disk of that radius,
+//! #                                # a directional light a sun of that angular diameter, °)
+//! # Area lights: kind = "rect", centre = [..], edge_u = [..], edge_v = [..] (full edges);
+//! # kind = "disk", centre, normal, radius; kind = "sphere", centre, radius.
 //!
 //! [[mesh]]
 //! name = "slab"                    # optional; names the material
@@ -134,7 +139,10 @@ pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
         scene.camera_path = camera_path;
     }
     if let Some(l) = &file.light {
-        scene.light = Some(sections::light(l).map_err(|what| fmt(format!("[light]: {what}")))?);
+        let (light, area) =
+            sections::light_with_area(l).map_err(|what| fmt(format!("[light]: {what}")))?;
+        scene.light = Some(light);
+        scene.area_light = area;
     }
     Ok(scene)
 }

@@ -1,7 +1,8 @@
 //! The `[camera]` and `[light]` sections of a TOML scene.
 
-use super::spec::{CameraSpec, LightKind, LightSpec};
+use super::spec::{CameraSpec, LightKind, LightSpec, V3};
 use super::{finite3, Msg, MAX_KEY_FRAMES};
+use crate::area_light::AreaLight;
 use crate::camera::{Camera, CameraKey, CameraPath};
 use crate::light::Light;
 use crate::scene::Scene;
@@ -63,6 +64,9 @@ pub(super) fn light(l: &LightSpec) -> Msg<Light> {
         LightKind::Directional => "directional",
         LightKind::Spot => "spot",
         LightKind::Point => "point",
+        LightKind::Rect | LightKind::Disk | LightKind::Sphere => {
+            return Err("an area light has no punctual form here".into())
+        }
     };
     let reject = |key: &str, given: bool| -> Msg<()> {
         if given {
@@ -112,6 +116,9 @@ pub(super) fn light(l: &LightSpec) -> Msg<Light> {
                 fov_deg: l.fov_deg.ok_or("a spot light needs `fov_deg`")?,
             }
         }
+        LightKind::Rect | LightKind::Disk | LightKind::Sphere => {
+            return Err("an area light has no punctual form here".into())
+        }
         LightKind::Point => {
             reject("direction", l.direction.is_some())?;
             reject("to_light", l.to_light.is_some())?;
@@ -127,4 +134,77 @@ pub(super) fn light(l: &LightSpec) -> Msg<Light> {
     };
     light.validate().map_err(|e| e.to_string())?;
     Ok(light)
+}
+
+/// The `[light]` section with its area: an area light (`rect`, `disk`, `sphere`) and its
+/// punctual stand-in, a punctual light given a `size` and the area light it becomes, or a
+/// punctual light alone. Keys that do not apply to the kind are refused.
+pub(super) fn light_with_area(l: &LightSpec) -> Msg<(Light, Option<AreaLight>)> {
+    let area_keys = [
+        ("centre", l.centre.is_some()),
+        ("edge_u", l.edge_u.is_some()),
+        ("edge_v", l.edge_v.is_some()),
+        ("normal", l.normal.is_some()),
+        ("radius", l.radius.is_some()),
+    ];
+    let punctual_keys = [
+        ("direction", l.direction.is_some()),
+        ("to_light", l.to_light.is_some()),
+        ("position", l.position.is_some()),
+        ("target", l.target.is_some()),
+        ("fov_deg", l.fov_deg.is_some()),
+        ("size", l.size.is_some()),
+    ];
+    let refuse = |keys: &[(&str, bool)], kind: &str| -> Msg<()> {
+        match keys.iter().find(|k| k.1) {
+            Some((key, _)) => Err(format!("`{key}` does not apply to a {kind} light")),
+            None => Ok(()),
+        }
+    };
+    let need = |v: Option<V3>, key: &str, kind: &str| -> Msg<crate::math::Vec3> {
+        finite3(v.ok_or(format!("a {kind} light needs `{key}`"))?, key)
+    };
+    let area = match l.kind {
+        LightKind::Directional | LightKind::Spot | LightKind::Point => {
+            refuse(&area_keys, "punctual")?;
+            let light = light(l)?;
+            return match l.size {
+                None => Ok((light, None)),
+                Some(size) => {
+                    let a = AreaLight::sized(&light, size)
+                        .map_err(|e| format!("`size` {size}: {e}"))?;
+                    Ok((light, Some(a)))
+                }
+            };
+        }
+        LightKind::Rect => {
+            refuse(&punctual_keys, "rect")?;
+            refuse(&area_keys[3..], "rect")?;
+            AreaLight::Rect {
+                centre: need(l.centre, "centre", "rect")?,
+                edge_u: need(l.edge_u, "edge_u", "rect")?,
+                edge_v: need(l.edge_v, "edge_v", "rect")?,
+            }
+        }
+        LightKind::Disk => {
+            refuse(&punctual_keys, "disk")?;
+            refuse(&area_keys[1..3], "disk")?;
+            AreaLight::Disk {
+                centre: need(l.centre, "centre", "disk")?,
+                normal: need(l.normal, "normal", "disk")?,
+                radius: l.radius.ok_or("a disk light needs `radius`")?,
+            }
+        }
+        LightKind::Sphere => {
+            refuse(&punctual_keys, "sphere")?;
+            refuse(&area_keys[1..4], "sphere")?;
+            AreaLight::Sphere {
+                centre: need(l.centre, "centre", "sphere")?,
+                radius: l.radius.ok_or("a sphere light needs `radius`")?,
+            }
+        }
+    };
+    area.validate().map_err(|e| e.to_string())?;
+    let area = area.normalized();
+    Ok((area.punctual(), Some(area)))
 }

@@ -64,6 +64,9 @@ pub(super) enum LightKind {
     Directional,
     Spot,
     Point,
+    Rect,
+    Disk,
+    Sphere,
 }
 
 #[derive(Deserialize)]
@@ -75,6 +78,12 @@ pub(super) struct LightSpec {
     pub(super) position: Option<V3>,
     pub(super) target: Option<V3>,
     pub(super) fov_deg: Option<f32>,
+    pub(super) size: Option<f32>,
+    pub(super) centre: Option<V3>,
+    pub(super) edge_u: Option<V3>,
+    pub(super) edge_v: Option<V3>,
+    pub(super) normal: Option<V3>,
+    pub(super) radius: Option<f32>,
 }
 
 #[derive(Deserialize)]

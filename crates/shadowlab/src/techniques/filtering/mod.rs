@@ -45,6 +45,7 @@
 //! Known departures from hardware: GPUs approximate λ and the anisotropic probe placement
 //! with reduced-precision arithmetic and vendor-specific footprints; here both are exact.
 
+pub mod blocker_search;
 pub mod blur;
 pub mod depth_range;
 pub mod footprint;

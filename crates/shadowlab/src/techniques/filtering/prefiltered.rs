@@ -5,6 +5,7 @@
 //! footprint and hand them to the technique's test ([`FilteredMaps::shade`]).
 
 use super::super::shadow_map::render_light_maps;
+use super::blocker_search::{wider, SoftSearch};
 use super::depth_range::DepthRange;
 use super::footprint::light_footprint;
 use super::mip::MipChain;
@@ -89,6 +90,8 @@ pub struct FilteredMaps<T> {
     pub ranges: Vec<DepthRange>,
     /// Bytes of the depth maps the chains were computed from.
     pub depth_bytes: u64,
+    /// With soft filtering, each view's depth map, kept for the blocker search.
+    pub depth_maps: Vec<DepthBuffer>,
 }
 
 impl<T: Channel> FilteredMaps<T> {
@@ -169,11 +172,13 @@ impl<T: Channel> FilteredMaps<T> {
             blurred.into_iter().map(|t| settings.mip_chain(t)).collect()
         });
         let depth_bytes = maps.memory_bytes();
+        let depth_maps = if settings.soft { maps.maps } else { Vec::new() };
         FilteredMaps {
             views: maps.views,
             chains,
             ranges,
             depth_bytes,
+            depth_maps,
         }
     }
 
@@ -199,9 +204,15 @@ impl<T: Channel> FilteredMaps<T> {
         Ok(())
     }
 
-    /// Bytes held by the filtered maps (every level of every view).
+    /// Bytes held by the filtered maps (every level of every view), and the depth maps
+    /// soft filtering keeps.
     pub fn memory_bytes(&self) -> u64 {
-        self.chains.iter().map(|c| c.memory_bytes()).sum()
+        let kept: u64 = self
+            .depth_maps
+            .iter()
+            .map(|m| m.depth.len() as u64 * 4)
+            .sum();
+        self.chains.iter().map(|c| c.memory_bytes()).sum::<u64>() + kept
     }
 
     /// The shadow term of every pixel of `frame`: for each pixel the light can reach, the
@@ -278,6 +289,7 @@ fn lookup_n<T: Channel, const N: usize>(
     let view = frame.view;
     let n = (view.width * view.height) as usize;
     let ch = chans::<N>(maps.chains.first().map_or(1, |c| c.channels()));
+    let soft = SoftSearch::new(frame, settings, &maps.views, &maps.depth_maps);
     let mut values = vec![Vec3::ONE; n];
     let mut codes = vec![0u8; n];
     values
@@ -292,6 +304,7 @@ fn lookup_n<T: Channel, const N: usize>(
                     frame,
                     settings,
                     first: c * PIXEL_CHUNK,
+                    soft: soft.as_ref(),
                 };
                 #[cfg(target_arch = "x86_64")]
                 if std::arch::is_x86_feature_detected!("avx2") {
@@ -314,6 +327,7 @@ struct LookupChunk<'a, 'f, T> {
     frame: &'a Frame<'f>,
     settings: &'a FilterSettings,
     first: usize,
+    soft: Option<&'a SoftSearch<'a>>,
 }
 
 impl<T: Channel> LookupChunk<'_, '_, T> {
@@ -355,7 +369,17 @@ impl<T: Channel> LookupChunk<'_, '_, T> {
             let i = light_view_index(frame.light, p);
             let lv = &maps.views[i];
             let s = lv.project(p);
-            let fp = light_footprint(lv, p, view.dpdx[k], view.dpdy[k]);
+            let mut fp = light_footprint(lv, p, view.dpdx[k], view.dpdy[k]);
+            if let Some(search) = &self.soft {
+                match search.footprint(frame, k, i, &s) {
+                    Some(wide) => fp = wider(wide, fp),
+                    None => {
+                        // No blocker in the light's cone: fully lit.
+                        *code = 1;
+                        continue;
+                    }
+                }
+            }
             let lod = maps.chains[i].sample_n::<N>(
                 s.u,
                 s.v,

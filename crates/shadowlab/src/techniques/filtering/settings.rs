@@ -18,6 +18,9 @@ pub struct FilterSettings {
     pub filter: Filter,
     /// Most probes of an anisotropic look-up.
     pub max_aniso: u32,
+    /// Soft shadows: each pixel's filter is widened to the penumbra a blocker search
+    /// estimates (see [`super::blocker_search`]) under the frame's area light.
+    pub soft: bool,
 }
 
 impl Default for FilterSettings {
@@ -26,13 +29,14 @@ impl Default for FilterSettings {
             blur: 0,
             filter: Filter::Anisotropic,
             max_aniso: DEFAULT_ANISOTROPY,
+            soft: false,
         }
     }
 }
 
 impl FilterSettings {
     /// The parameters these settings answer to, in key order.
-    pub const SPECS: [ParamSpec; 3] = [
+    pub const SPECS: [ParamSpec; 4] = [
         ParamSpec::int(
             "blur",
             0,
@@ -50,6 +54,10 @@ impl FilterSettings {
             MAX_ANISOTROPY as i64,
             "most tri-linear probes of one anisotropic look-up (the paper's 16)",
         ),
+        ParamSpec::flag(
+            "soft",
+            "widen each pixel's filter to the penumbra a PCSS blocker search estimates under the area light (the -soft variants); needs a mip-mapped filter",
+        ),
     ];
 
     /// Adds the settings to a technique's parameter list.
@@ -62,6 +70,7 @@ impl FilterSettings {
         m.insert("blur".into(), blur);
         m.insert("filter".into(), self.filter.name().into());
         m.insert("max-aniso".into(), self.max_aniso.into());
+        m.insert("soft".into(), self.soft.into());
     }
 
     /// Sets one of the keys in [`Self::SPECS`]; `Ok(false)` when `key` is not one of them.
@@ -73,6 +82,7 @@ impl FilterSettings {
         match key {
             "blur" => self.blur = parse_blur(technique, value)?,
             "filter" => self.filter = Filter::parse(technique, value)?,
+            "soft" => self.soft = spec.bool(technique, value)?,
             _ => self.max_aniso = spec.u32(technique, value)?,
         }
         Ok(true)
