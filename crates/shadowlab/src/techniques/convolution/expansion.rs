@@ -8,25 +8,28 @@ use std::f32::consts::PI;
 /// Default truncation order M: 16, the order of the paper's Figures 4 and 5. The paper
 /// finds M = 4 "satisfactory" on its scenes, but the offset that lights a self-occluding
 /// surface and the step's half-width are fixed shares of the fitted light-depth range
-/// (0.10 and 0.07 of it at M = 4, α = 0.5), so on a real scene metres deep every shadow
-/// within that distance of its caster is lost: measured at 480×360 against a 16-sample
-/// reference, M = 4 had 1.3–5.4× the mean error of the better of `vsm` and `pcf` on eight
-/// real meshes; at the defaults (M = 16, α = 0) it is 1.0–1.9× on eighteen, within 1.3×
-/// on eleven (`scripts/verdict-table.sh`). Contact shadows within the offset of their
-/// caster and curved receivers shading themselves across a wide footprint remain its
-/// largest errors. The price is four times the basis images (memory and encode time)
-/// and four times the look-up work of M = 4, and more error under strong minification:
-/// on the `fence-far` scene at 160×120, where every look-up spans many texels, M = 16
-/// has 0.082 mean error (0.046 with α = 1) against 0.027 at M = 4, α = 0.5, and `pcf`'s
-/// 0.029; pass `m=4` and `alpha=0.5` for such views.
+/// (0.10 and 0.07 of it at M = 4, α = 0.5, unscaled), so on a real scene metres deep every
+/// shadow within that distance of its caster is lost: measured at 480×360 against a
+/// 16-sample reference, M = 4 had 1.3–5.4× the mean error of the better of `vsm` and `pcf`
+/// on eight real meshes. At the defaults (M = 16, α = 0, the step scaled by 2 about 0.1,
+/// see [`super::DEFAULT_SCALE`]) it is 0.81–1.09× on the twenty of
+/// `scripts/verdict-table.sh`, at most both on fifteen; M = 8 with the same scale had more
+/// error than M = 16 on 19 of them (4–71% more; 3% less on the teapot). Contact shadows
+/// within the offset of their caster and curved receivers shading themselves across a
+/// wide footprint remain its largest errors. The price is four times the basis images
+/// (memory and encode time) and four times the look-up work of M = 4, and more error
+/// under strong minification: on the `fence-far` scene at 160×120, where every look-up
+/// spans many texels, M = 16 has 0.037 mean error against 0.022 at M = 4, α = 0.5, and
+/// `pcf`'s 0.029 (16-sample reference); pass `m=4` and `alpha=0.5` for such views.
 pub const DEFAULT_M: u32 = 16;
 /// The largest truncation order accepted.
 pub const MAX_M: u32 = 16;
 /// Default ringing attenuation α: none. At M = 16 the Gibbs overshoot (9%) is clamped away
-/// on lit surfaces and the ringing in shadow is confined to |z − d| < a few 1/M; any α > 0
-/// flattens the step and needs a larger offset, which fades more contact shadows: at
-/// M = 16, α = 0.5 had 5–25% more mean error than α = 0 on every real mesh measured, α = 1
-/// 15–65%. At M = 4, α = 0.5 lowers the overshoot to 2.5% and is the better choice there.
+/// on lit surfaces, and in shadow by the scale's pivot ([`super::DEFAULT_PIVOT`]); any
+/// α > 0 flattens the step and needs a larger offset, which fades more contact shadows: at
+/// M = 16 with the default scale, α = 0.5 had 1–11% more mean error than α = 0 on 19 of
+/// the 20 real meshes measured (3% less on the teapot). At M = 4, α = 0.5 lowers the overshoot to 2.5% and is the better
+/// choice there.
 pub const DEFAULT_ALPHA: f32 = 0.0;
 
 /// The truncated, attenuated Fourier expansion of the shadow test (Eqs. 10–14).
