@@ -37,7 +37,7 @@ pub fn light_arg(l: &Light) -> String {
 
 /// The light as `render --light` reads its text: what the viewer shows.
 pub fn as_rendered(l: &Light) -> Result<Light> {
-    Ok(parse_light(&light_arg(l))?.normalized())
+    Ok(parse_light(&light_arg(l))?.0.normalized())
 }
 
 /// What a view is made of, for its command line.
