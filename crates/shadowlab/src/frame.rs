@@ -143,6 +143,20 @@ impl<'a> Frame<'a> {
                 .illuminates(self.view.position[k], self.view.normal[k])
     }
 
+    /// Pixel `k`'s shadow term when no look-up is needed: `None` when the light can reach
+    /// its surface (the technique decides), else 0 for a surface the light cannot reach and
+    /// 1 for a pixel that shows no surface.
+    #[inline]
+    pub fn unreached(&self, k: usize) -> Option<Vec3> {
+        if self.receiver_lit(k) {
+            None
+        } else if self.view.covered(k) {
+            Some(Vec3::ZERO)
+        } else {
+            Some(Vec3::ONE)
+        }
+    }
+
     /// True when layer sample `i` of [`Frame::layers`] faces the light (see
     /// [`Light::illuminates`]).
     #[inline]

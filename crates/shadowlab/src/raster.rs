@@ -58,9 +58,23 @@ pub struct Fragment {
     pub id: u32,
     /// Interpolated depth attribute.
     pub depth: f32,
+    /// 1/w at the pixel centre.
+    inv_w: f64,
+    /// The source triangle's barycentrics of vertices 1 and 2, over w, at the pixel centre.
+    b_over_w: [f64; 2],
+}
+
+impl Fragment {
     /// Barycentrics of the pixel centre in the source triangle (weights of its vertices
-    /// 0, 1, 2), interpolated perspective-correctly through clipping.
-    pub bary: [f32; 3],
+    /// 0, 1, 2), interpolated perspective-correctly through clipping. Worked out on demand:
+    /// only alpha-masked casters read them, and two divisions a fragment would otherwise
+    /// fall on every map.
+    #[inline]
+    pub fn bary(&self) -> [f32; 3] {
+        let b1 = (self.b_over_w[0] / self.inv_w) as f32;
+        let b2 = (self.b_over_w[1] / self.inv_w) as f32;
+        [1.0 - b1 - b2, b1, b2]
+    }
 }
 
 /// A rectangle of pixels, `[x0, x1) × [y0, y1)`.
@@ -417,14 +431,13 @@ fn raster_triangle(t: &SetupTriangle, rect: &TileRect, emit: &mut impl FnMut(Fra
         let mut fragment = |x: u32, i: f64| {
             let inv_w = inv_w0 + inv_w_step * i;
             let depth = ((dw0 + dw_step * i) / inv_w) as f32;
-            let b1 = ((b1w0 + b1w_step * i) / inv_w) as f32;
-            let b2 = ((b2w0 + b2w_step * i) / inv_w) as f32;
             emit(Fragment {
                 x,
                 y,
                 id: t.id,
                 depth,
-                bary: [1.0 - b1 - b2, b1, b2],
+                inv_w,
+                b_over_w: [b1w0 + b1w_step * i, b2w0 + b2w_step * i],
             });
         };
         if spans {

@@ -117,7 +117,7 @@ impl ViewSamples {
         // An alpha-masked surface is no surface where its texture cuts it out.
         let masked = scene.has_alpha_masks();
         let buf = raster::depth_buffer_where(&setups, w, h, |f| {
-            !masked || !scene.cut_out(f.id as usize, f.bary)
+            !masked || !scene.cut_out(f.id as usize, f.bary())
         });
         let n = w as usize * h as usize;
         let what = format!("the {w}x{h} camera pass");
@@ -276,7 +276,7 @@ impl ViewLayers {
             |_| Vec::new(),
             |frags: &mut Vec<(u32, f32, u32)>, _, f| {
                 let k = (f.y * w + f.x) as usize;
-                if see_through(k) && !scene.cut_out(f.id as usize, f.bary) {
+                if see_through(k) && !scene.cut_out(f.id as usize, f.bary()) {
                     frags.push((k as u32, f.depth, f.id));
                 }
             },

@@ -34,7 +34,7 @@ pub fn depth_buffer(tris: &[SetupTriangle], width: u32, height: u32) -> DepthBuf
 
 /// [`depth_buffer`] of the fragments `keep` accepts only: an alpha-masked caster's
 /// fragments are dropped where its texture cuts it out
-/// (`|f| !scene.cut_out(f.id as usize, f.bary)`, through the caller's id mapping).
+/// (`|f| !scene.cut_out(f.id as usize, f.bary())`, through the caller's id mapping).
 pub fn depth_buffer_where<K>(
     tris: &[SetupTriangle],
     width: u32,

@@ -185,12 +185,8 @@ impl ShadowTechnique for Pcss {
                 .into_par_iter()
                 .with_min_len(512)
                 .map(|k| {
-                    if !frame.receiver_lit(k) {
-                        return if view.covered(k) {
-                            Vec3::ZERO
-                        } else {
-                            Vec3::ONE
-                        };
+                    if let Some(v) = frame.unreached(k) {
+                        return v;
                     }
                     let p = view.position[k];
                     let face = &faces[maps.select(frame.light, p)];

@@ -144,7 +144,7 @@ pub fn render_depth_map(scene: &Scene, view: &LightView, res: u32) -> DepthBuffe
     });
     let masked = scene.has_alpha_masks();
     raster::depth_buffer_where(&setups, res, res, |f| {
-        !masked || !scene.cut_out(f.id as usize, f.bary)
+        !masked || !scene.cut_out(f.id as usize, f.bary())
     })
 }
 
@@ -326,12 +326,8 @@ impl ShadowTechnique for ShadowMap {
                 .into_par_iter()
                 .with_min_len(1024)
                 .map(|k| {
-                    if !frame.receiver_lit(k) {
-                        return if view.covered(k) {
-                            Vec3::ZERO
-                        } else {
-                            Vec3::ONE
-                        };
+                    if let Some(v) = frame.unreached(k) {
+                        return v;
                     }
                     let p = view.position[k];
                     let i = maps.select(frame.light, p);

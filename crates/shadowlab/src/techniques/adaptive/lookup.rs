@@ -65,12 +65,8 @@ impl Tree {
         let mut cache: Option<(usize, u32)> = None;
         for x in 0..w {
             let k = (y * w + x) as usize;
-            if !frame.receiver_lit(k) {
-                vals.push(if view.covered(k) {
-                    Vec3::ZERO
-                } else {
-                    Vec3::ONE
-                });
+            if let Some(v) = frame.unreached(k) {
+                vals.push(v);
                 continue;
             }
             let pos = view.position[k];

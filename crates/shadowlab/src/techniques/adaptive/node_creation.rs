@@ -80,7 +80,7 @@ pub(super) fn render_tile(
     });
     let masked = scene.has_alpha_masks();
     let buf = raster::depth_buffer_where(&setups, res, res, |f| {
-        !masked || !scene.cut_out(selection[f.id as usize] as usize, f.bary)
+        !masked || !scene.cut_out(selection[f.id as usize] as usize, f.bary())
     });
     let id = buf
         .id

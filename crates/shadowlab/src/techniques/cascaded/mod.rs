@@ -287,12 +287,7 @@ impl Cascaded {
             .into_par_iter()
             .with_min_len(1024)
             .map(|k| {
-                if !frame.receiver_lit(k) {
-                    let v = if view.covered(k) {
-                        Vec3::ZERO
-                    } else {
-                        Vec3::ONE
-                    };
+                if let Some(v) = frame.unreached(k) {
                     return (v, u8::MAX);
                 }
                 let z = (view.position[k] - cam.eye).dot(f);

@@ -214,12 +214,8 @@ impl LightSpacePerspective {
             .into_par_iter()
             .with_min_len(1024)
             .map(|k| {
-                if !frame.receiver_lit(k) {
-                    return if view.covered(k) {
-                        Vec3::ZERO
-                    } else {
-                        Vec3::ONE
-                    };
+                if let Some(v) = frame.unreached(k) {
+                    return v;
                 }
                 let p = view.position[k];
                 let s = m.view.project(p);

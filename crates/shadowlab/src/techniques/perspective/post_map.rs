@@ -196,10 +196,10 @@ pub(super) fn render_post_map(
             false
         } else if i < n {
             scene.material_of(i).alpha_mask.is_some()
-                && scene.cut_out(i, world(scene.triangle(i), f.bary))
+                && scene.cut_out(i, world(scene.triangle(i), f.bary()))
         } else {
             let (src, p) = pieces[i - n];
-            let b = world(p, f.bary);
+            let b = world(p, f.bary());
             scene.cut_out_at(src as usize, p[0] * b[0] + p[1] * b[1] + p[2] * b[2])
         }
     };
