@@ -126,12 +126,15 @@ fn along_the_room_walk_the_adaptive_maps_error_falls_as_it_refines() {
         .map(Option::unwrap)
         .collect();
     assert_eq!(asm.len(), 8);
-    // While the camera walks slowly into the room, asm's error falls frame by frame, and
-    // faster than a stateless standard map's on the same frames: the refinement catches up.
-    assert!(asm[0] > asm[1] && asm[1] > asm[2], "asm per frame: {asm:?}");
-    assert!(asm[2] < 0.5 * asm[0], "asm per frame: {asm:?}");
+    // While the camera walks slowly into the room at the path's pace, asm's error falls
+    // frame after frame as the refinement catches up, and falls further than a stateless
+    // standard map's on the same frames (which moves only with what the view shows).
+    for i in 1..asm.len() {
+        assert!(asm[i] <= asm[i - 1], "asm per frame: {asm:?}");
+    }
+    assert!(asm[7] < 0.5 * asm[0], "asm per frame: {asm:?}");
     assert!(
-        asm[2] / asm[0] < sm[2] / sm[0],
+        asm[7] / asm[0] < 0.75 * (sm[7] / sm[0]),
         "asm {asm:?} against sm {sm:?}"
     );
 }

@@ -225,17 +225,43 @@ pub struct CameraKey {
     pub target: Vec3,
 }
 
-/// A key-framed camera path: eye and target interpolated linearly between keys, sampled
-/// at `n` evenly spaced frames from the first key to the last.
+/// A key-framed camera path: eye and target interpolated linearly between keys.
+///
+/// A path with a `pace` is walked at that pace whatever the frame count: frame `i` is at
+/// `i / (pace − 1)` of the way from the first key to the last (the camera stays at the
+/// last key after it), so the first `n` frames of a walkthrough move the camera the same
+/// distance per frame for any `n`, as a real walkthrough does, and a progressive
+/// technique sees the coherent motion it is built for. A path without one is stretched
+/// over whatever frame count is asked: `n` evenly spaced frames from the first key to the
+/// last.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct CameraPath {
     /// The keys, in order.
     pub keys: Vec<CameraKey>,
+    /// The frames from the first key to the last at the path's own pace (at least 2), or
+    /// `None` to stretch the path over every sequence.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pace: Option<u32>,
 }
 
 impl CameraPath {
-    /// The camera of frame `i` of `n`, starting from `base` (which gives fov, up, size).
+    /// A path stretched over every sequence.
+    pub fn stretched(keys: Vec<CameraKey>) -> Self {
+        CameraPath { keys, pace: None }
+    }
+
+    /// The camera of frame `i` of `n`, starting from `base` (which gives fov, up, size):
+    /// at the path's pace when it has one, else stretched over the `n` frames.
     pub fn camera_at(&self, base: &Camera, i: usize, n: usize) -> Camera {
+        match self.pace {
+            Some(pace) => self.camera_along(base, i, pace.max(2) as usize),
+            None => self.camera_along(base, i, n),
+        }
+    }
+
+    /// The camera of frame `i` when `n` evenly spaced frames span the path from its first
+    /// key to its last (frames past the end stay at the last key).
+    pub fn camera_along(&self, base: &Camera, i: usize, n: usize) -> Camera {
         let mut c = *base;
         if self.keys.is_empty() {
             return c;
@@ -245,7 +271,7 @@ impl CameraPath {
             c.target = self.keys[0].target;
             return c;
         }
-        let s = i as f32 / (n - 1) as f32 * (self.keys.len() - 1) as f32;
+        let s = (i.min(n - 1)) as f32 / (n - 1) as f32 * (self.keys.len() - 1) as f32;
         let k = (s.floor() as usize).min(self.keys.len() - 2);
         let t = s - k as f32;
         let (a, b) = (self.keys[k], self.keys[k + 1]);
@@ -278,6 +304,30 @@ mod tests {
                 "{sx},{sy} vs {x},{y}"
             );
             assert!((c.w - 7.0).abs() < 1e-4);
+        }
+    }
+
+    #[test]
+    fn a_paced_path_moves_as_far_per_frame_for_any_frame_count() {
+        let base = Camera::look_at(vec3(0.0, 0.0, 5.0), Vec3::ZERO, 50.0, 64, 48);
+        let key = |x: f32| CameraKey {
+            eye: vec3(x, 0.0, 5.0),
+            target: vec3(x, 0.0, 0.0),
+        };
+        let mut path = CameraPath::stretched(vec![key(0.0), key(1.0), key(3.0)]);
+        // Stretched: the last of n frames is at the last key, whatever n.
+        for n in [2, 5, 9] {
+            assert_eq!(path.camera_at(&base, n - 1, n).eye.x, 3.0);
+        }
+        path.pace = Some(5);
+        for n in [2, 5, 9] {
+            for i in 0..n {
+                let c = path.camera_at(&base, i, n);
+                // At the pace, 4 frames from the first key to the last, then standing still.
+                let s = (i.min(4) as f32) / 2.0;
+                let x = if s <= 1.0 { s } else { 1.0 + 2.0 * (s - 1.0) };
+                assert!((c.eye.x - x).abs() < 1e-6, "frame {i} of {n}: {}", c.eye.x);
+            }
         }
     }
 }

@@ -132,7 +132,7 @@ fn walkthrough_stays_within_budget_and_revisits_restore_quality() {
     let mut full = false;
     let walk = 10;
     for i in 0..walk {
-        let cam = path.camera_at(
+        let cam = path.camera_along(
             &c,
             i * (path.keys.len() - 1) / (walk - 1) + 1,
             path.keys.len(),

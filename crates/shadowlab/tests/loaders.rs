@@ -734,6 +734,8 @@ fn malformed_inputs_give_errors_naming_the_file() {
         ("no-mesh.toml", b"[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\n".to_vec(), vec!["[[mesh]]"]),
         ("bad-value.toml", b"[[mesh]]\ngenerator = \"box\"\nopacity = 1.5\n".to_vec(), vec!["[[mesh]] 1", "opacity"]),
         ("bad-light.toml", b"[[mesh]]\ngenerator = \"box\"\n[light]\nkind = \"point\"\nposition = [0, 3, 0]\nfov_deg = 30\n".to_vec(), vec!["[light]", "fov_deg"]),
+        ("pace-alone.toml", b"[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\npace = 10\n[[mesh]]\ngenerator = \"box\"\n".to_vec(), vec!["[camera]", "pace", "path"]),
+        ("pace-one.toml", b"[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\npath = [{ eye = [0, 0, 5], target = [0, 0, 0] }]\npace = 1\n[[mesh]]\ngenerator = \"box\"\n".to_vec(), vec!["[camera]", "pace", "1"]),
         ("bad-kind.toml", b"[[mesh]]\ngenerator = \"box\"\n[light]\nkind = \"area\"\n".to_vec(), vec!["line 4", "area"]),
         ("unknown-generator.toml", b"[[mesh]]\ngenerator = \"teapotz\"\n".to_vec(), vec!["[[mesh]] 1", "teapotz"]),
         ("bad-param.toml", b"[[mesh]]\ngenerator = \"sphere\"\nparams = { rings = 3 }\n".to_vec(), vec!["[[mesh]] 1", "rings", "segments"]),
@@ -868,6 +870,7 @@ fn toml_documented_example_loads_as_documented() {
     );
     assert_eq!((c.near, c.far), (0.05, 20.0));
     assert_eq!(s.camera_path.as_ref().unwrap().keys.len(), 2);
+    assert_eq!(s.camera_path.as_ref().unwrap().pace, Some(48));
     assert_eq!(
         s.light,
         Some(Light::Spot {

@@ -111,7 +111,7 @@ fn walk(frames: usize, repeat: usize) -> Result<Walk> {
     };
     let bar = crate::progress::bar(frames as u64, "asm-walkthrough");
     for i in 0..frames {
-        let mut camera = path.camera_at(&base, i, frames);
+        let mut camera = path.camera_along(&base, i, frames);
         camera.fit_depth_range(&scene.bounds);
         let view = ViewSamples::render(&scene, &camera);
         let mut frame = Frame::new(&scene, &camera, &light, &view);

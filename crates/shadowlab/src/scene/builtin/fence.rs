@@ -118,6 +118,6 @@ pub(super) fn build(p: &Params, far: bool) -> Result<Scene> {
             }
         })
         .collect();
-    s.camera_path = Some(CameraPath { keys });
+    s.camera_path = Some(CameraPath::stretched(keys));
     Ok(s)
 }

@@ -25,6 +25,8 @@ const TEAPOT_OBJ: &str = include_str!("../../../assets/teapot.obj");
 pub const ROOM_LIGHT_FOV_DEG: f32 = 122.0;
 /// The room's half width and depth, and its height (metres).
 const ROOM: (f32, f32) = (4.0, 3.0);
+/// The frames the room's walkthrough takes from its first key to its last.
+pub const ROOM_WALK_FRAMES: u32 = 120;
 
 pub(super) fn build(p: &Params) -> Result<Scene> {
     let light_kind = p.map.get("light").map(|v| v.trim().to_ascii_lowercase());
@@ -136,9 +138,12 @@ pub(super) fn build(p: &Params) -> Result<Scene> {
         }
     });
     s.camera = Some(camera(vec3(3.4, 1.7, 3.5), vec3(-0.3, 0.5, -0.6), 60.0));
-    // A walkthrough: along the room, up to the bunny, round to the table and the sculpture.
+    // A walkthrough: along the room, up to the bunny, round to the table and the sculpture,
+    // at a walking pace (a few centimetres a frame): the first frames of any sequence walk
+    // slowly in from the door, the whole tour takes ROOM_WALK_FRAMES.
     let key = |eye: Vec3, target: Vec3| CameraKey { eye, target };
     s.camera_path = Some(CameraPath {
+        pace: Some(ROOM_WALK_FRAMES),
         keys: vec![
             key(vec3(3.4, 1.7, 3.5), vec3(-0.3, 0.5, -0.6)),
             key(vec3(0.5, 1.4, 2.5), vec3(-1.4, 0.4, -1.0)),

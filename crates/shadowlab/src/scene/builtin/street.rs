@@ -149,17 +149,15 @@ pub(super) fn build(p: &Params) -> Result<Scene> {
     let (eye, target) = (vec3(-2.0, 1.7, 15.0), vec3(-1.5, 1.2, -100.0));
     s.camera = Some(camera(eye, target, 60.0));
     let step = Vec3::X * (DOLLY_METRES * 0.5);
-    s.camera_path = Some(CameraPath {
-        keys: vec![
-            CameraKey {
-                eye: eye - step,
-                target: target - step,
-            },
-            CameraKey {
-                eye: eye + step,
-                target: target + step,
-            },
-        ],
-    });
+    s.camera_path = Some(CameraPath::stretched(vec![
+        CameraKey {
+            eye: eye - step,
+            target: target - step,
+        },
+        CameraKey {
+            eye: eye + step,
+            target: target + step,
+        },
+    ]));
     Ok(s)
 }

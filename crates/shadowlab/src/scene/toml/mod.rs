@@ -20,6 +20,9 @@
 //!     { eye = [0.0, 1.2, 3.0], target = [0.0, 0.3, 0.0] },
 //!     { eye = [2.0, 1.0, 2.0], target = [0.0, 0.3, 0.0] },
 //! ]
+//! pace = 48                        # optional: frames from the first key to the last, so
+//!                                  # any --frames N walks at that pace (and stays at the
+//!                                  # last key after it); default: stretched over the N frames
 //!
 //! [light]                          # optional; default: directional from above
 //! kind = "spot"                    # "directional", "spot" or "point"

@@ -30,6 +30,13 @@ pub(super) fn camera(c: &CameraSpec, scene: &Scene) -> Msg<(Camera, Option<Camer
         (None, None) => {}
     }
     camera.validate().map_err(|e| e.to_string())?;
+    let pace = match (c.pace, &c.path) {
+        (Some(_), None) => return Err("`pace` is given without a `path`".into()),
+        (Some(p), _) if !(2..=MAX_KEY_FRAMES as u32).contains(&p) => {
+            return Err(format!("`pace` {p} is outside 2..={MAX_KEY_FRAMES}"))
+        }
+        (p, _) => p,
+    };
     let path = match &c.path {
         None => None,
         Some(keys) if keys.is_empty() => return Err("`path` has no key frames".into()),
@@ -51,7 +58,7 @@ pub(super) fn camera(c: &CameraSpec, scene: &Scene) -> Msg<(Camera, Option<Camer
                 check.validate().map_err(|e| format!("path[{i}]: {e}"))?;
                 out.push(key);
             }
-            Some(CameraPath { keys: out })
+            Some(CameraPath { keys: out, pace })
         }
     };
     Ok((camera, path))

@@ -49,6 +49,7 @@ pub(super) struct CameraSpec {
     pub(super) near: Option<f32>,
     pub(super) far: Option<f32>,
     pub(super) path: Option<Vec<KeySpec>>,
+    pub(super) pace: Option<u32>,
 }
 
 #[derive(Deserialize)]
