@@ -7,11 +7,13 @@
 //! scene's light (or the default one) normalized — so the same scene and parameters give
 //! the command line's values bit for bit.
 
+mod compare;
 mod convert;
 mod scene;
 
 use convert::{bad, py_err, vec3_of, ShadowlabError};
 use pyo3::prelude::*;
+use shadowlab::area_light::{check_light_samples, AreaLight, DEFAULT_LIGHT_SAMPLES};
 use shadowlab::camera::Camera;
 use shadowlab::light::Light;
 
@@ -93,11 +95,21 @@ impl PyCamera {
 }
 
 /// A light: `Light.directional(to_light)`, `Light.point(position)` or
-/// `Light.spot(position, target, fov_deg)`.
+/// `Light.spot(position, target, fov_deg)`; an area light `Light.rect(centre, edge_u,
+/// edge_v)`, `Light.disk(centre, normal, radius)`, `Light.sphere(centre, radius)`, or any
+/// punctual light given a size (`light.sized(size)`). An area light carries the number of
+/// light samples per point (`samples`, default 256, as `--light-samples`) that the
+/// soft-shadow reference (`raytrace`) and the soft techniques take; map-based techniques
+/// see its centre as a punctual light.
 #[pyclass(name = "Light", module = "shadowlab", from_py_object)]
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 pub struct PyLight {
+    /// The punctual light, or an area light's punctual stand-in.
     pub inner: Light,
+    /// The area light, when the light has an area.
+    pub area: Option<AreaLight>,
+    /// Light samples per point under the area light.
+    pub samples: u32,
 }
 
 impl PyLight {
@@ -105,6 +117,19 @@ impl PyLight {
         l.validate().map_err(py_err)?;
         Ok(PyLight {
             inner: l.normalized(),
+            area: None,
+            samples: DEFAULT_LIGHT_SAMPLES,
+        })
+    }
+
+    fn area(a: AreaLight, samples: u32) -> PyResult<Self> {
+        a.validate().map_err(py_err)?;
+        check_light_samples(samples).map_err(py_err)?;
+        let a = a.normalized();
+        Ok(PyLight {
+            inner: a.punctual(),
+            area: Some(a),
+            samples,
         })
     }
 }
@@ -138,23 +163,104 @@ impl PyLight {
             fov_deg,
         })
     }
-    /// `"directional"`, `"point"` or `"spot"`.
+    /// A parallelogram light `centre + s·edge_u + t·edge_v`, `s, t ∈ [-½, ½]` (full edges),
+    /// emitting from both faces.
+    #[staticmethod]
+    #[pyo3(signature = (centre, edge_u, edge_v, samples = DEFAULT_LIGHT_SAMPLES))]
+    fn rect(
+        centre: &Bound<'_, PyAny>,
+        edge_u: &Bound<'_, PyAny>,
+        edge_v: &Bound<'_, PyAny>,
+        samples: u32,
+    ) -> PyResult<Self> {
+        let a = AreaLight::Rect {
+            centre: vec3_of(centre, "rect light centre")?,
+            edge_u: vec3_of(edge_u, "rect light edge_u")?,
+            edge_v: vec3_of(edge_v, "rect light edge_v")?,
+        };
+        Self::area(a, samples)
+    }
+    /// A disk light of `radius` about `centre`, facing along `normal` (both faces emit).
+    #[staticmethod]
+    #[pyo3(signature = (centre, normal, radius, samples = DEFAULT_LIGHT_SAMPLES))]
+    fn disk(
+        centre: &Bound<'_, PyAny>,
+        normal: &Bound<'_, PyAny>,
+        radius: f32,
+        samples: u32,
+    ) -> PyResult<Self> {
+        let a = AreaLight::Disk {
+            centre: vec3_of(centre, "disk light centre")?,
+            normal: vec3_of(normal, "disk light normal")?,
+            radius,
+        };
+        Self::area(a, samples)
+    }
+    /// A spherical light of `radius` about `centre`.
+    #[staticmethod]
+    #[pyo3(signature = (centre, radius, samples = DEFAULT_LIGHT_SAMPLES))]
+    fn sphere(centre: &Bound<'_, PyAny>, radius: f32, samples: u32) -> PyResult<Self> {
+        let a = AreaLight::Sphere {
+            centre: vec3_of(centre, "sphere light centre")?,
+            radius,
+        };
+        Self::area(a, samples)
+    }
+    /// This punctual light given a size, as `--light-size`: a point light becomes a sphere
+    /// of radius `size`, a spot light a disk of radius `size` facing its target, a
+    /// directional light a sun of angular diameter `size` degrees.
+    #[pyo3(signature = (size, samples = DEFAULT_LIGHT_SAMPLES))]
+    fn sized(&self, size: f32, samples: u32) -> PyResult<Self> {
+        if self.area.is_some() {
+            return Err(bad("sized: the light already has an area"));
+        }
+        let a = AreaLight::sized(&self.inner, size).map_err(py_err)?;
+        let mut l = Self::area(a, samples)?;
+        // A sized spot light keeps its cone: the stand-in stays the spot light itself.
+        l.inner = self.inner;
+        Ok(l)
+    }
+    /// Light samples per point under an area light (the reference's and the soft
+    /// techniques'); 256 unless given.
+    #[getter]
+    fn samples(&self) -> u32 {
+        self.samples
+    }
+    /// `"directional"`, `"point"` or `"spot"`; for an area light its shape (`"rect"`,
+    /// `"disk"`, `"sphere"`, `"distant"`).
     #[getter]
     fn kind(&self) -> &'static str {
-        self.inner.kind()
+        match &self.area {
+            Some(a) => a.kind(),
+            None => self.inner.kind(),
+        }
     }
-    /// The light as `metrics.json` records it.
+    /// True for an area light.
+    #[getter]
+    fn is_area(&self) -> bool {
+        self.area.is_some()
+    }
+    /// The light as `metrics.json` records it (an area light as `{"area": …, "stand_in":
+    /// …}`).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        convert::json_to_py(
-            py,
-            &serde_json::to_value(self.inner).expect("lights serialize"),
-        )
+        convert::json_to_py(py, &self.json())
     }
     fn __repr__(&self) -> String {
-        format!(
-            "Light({})",
-            serde_json::to_string(&self.inner).unwrap_or_default()
-        )
+        format!("Light({})", self.json())
+    }
+}
+
+impl PyLight {
+    fn json(&self) -> serde_json::Value {
+        let punctual = serde_json::to_value(self.inner).expect("lights serialize");
+        match &self.area {
+            None => punctual,
+            Some(a) => serde_json::json!({
+                "area": serde_json::to_value(a).expect("area lights serialize"),
+                "samples": self.samples,
+                "stand_in": punctual,
+            }),
+        }
     }
 }
 

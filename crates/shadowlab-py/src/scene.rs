@@ -1,21 +1,19 @@
 //! `shadowlab.Scene`: a scene and the frames rendered from it.
 
+use crate::compare::{compare_frame, in_technique, make, CompareSpec};
 use crate::convert::{self, bad, py_err, vec3_of, vec3s};
 use crate::{PyCamera, PyLight};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use serde_json::{json, Value};
+use shadowlab::area_light::{AreaLight, DEFAULT_LIGHT_SAMPLES};
 use shadowlab::camera::Camera;
-use shadowlab::compare::compare as measure;
 use shadowlab::light::Light;
 use shadowlab::math::{vec3, Vec3};
 use shadowlab::multi_light::PerLight;
 use shadowlab::points::{visibility_of_points, Points};
-use shadowlab::reference::Reference;
-use shadowlab::sampling::{pattern, PatternKind};
 use shadowlab::scene::mesh::IndexedMesh;
 use shadowlab::scene::{Material, Scene};
-use shadowlab::techniques::{self, Frame, ShadowTechnique, Shadows};
+use shadowlab::techniques::{self, Frame, Shadows};
 use shadowlab::view::ViewSamples;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -43,27 +41,6 @@ fn params_of(p: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String)>> {
     Ok(out)
 }
 
-fn make(name: &str, params: &[(String, String)]) -> shadowlab::Result<Box<dyn ShadowTechnique>> {
-    let mut t = techniques::create(name)?;
-    for (k, v) in params {
-        t.set_param(k, v)?;
-    }
-    Ok(t)
-}
-
-/// A technique's failure with the technique named, as the command line reports it.
-fn in_technique(name: &str, e: shadowlab::Error) -> shadowlab::Error {
-    let msg = format!("technique {name}: {e}");
-    if e.is_bad_input() {
-        shadowlab::Error::Param(msg)
-    } else {
-        shadowlab::Error::Output {
-            path: Default::default(),
-            what: msg,
-        }
-    }
-}
-
 fn material(
     name: String,
     color: Option<&Bound<'_, PyAny>>,
@@ -83,12 +60,13 @@ fn material(
 }
 
 impl PyScene {
-    /// The camera and light of a frame, resolved as the command line resolves them.
+    /// The camera and light of a frame, resolved as the command line resolves them: the
+    /// given light (or the scene's, or the default one) and its area, if it has one.
     fn resolve(
         &self,
         camera: Option<PyCamera>,
         light: Option<PyLight>,
-    ) -> PyResult<(Camera, Light)> {
+    ) -> PyResult<(Camera, Light, Option<AreaLight>, u32)> {
         let s = &self.inner;
         let mut c = match camera.map(|c| c.inner).or(s.camera) {
             Some(c) => c,
@@ -101,14 +79,38 @@ impl PyScene {
         };
         c.fit_depth_range(&s.bounds);
         c.validate().map_err(py_err)?;
-        let l = light
-            .map(|l| l.inner)
-            .or(s.light)
-            .unwrap_or(Light::Directional {
-                to_light: DEFAULT_TO_LIGHT.normalize(),
-            });
+        let (l, area, samples) = match light {
+            Some(l) => (l.inner, l.area, l.samples),
+            None => match s.light {
+                Some(l) => (l, s.area_light, DEFAULT_LIGHT_SAMPLES),
+                None => (
+                    Light::Directional {
+                        to_light: DEFAULT_TO_LIGHT.normalize(),
+                    },
+                    None,
+                    DEFAULT_LIGHT_SAMPLES,
+                ),
+            },
+        };
         l.validate().map_err(py_err)?;
-        Ok((c, l.normalized()))
+        Ok((c, l.normalized(), area, samples))
+    }
+
+    /// The camera and a punctual light, for the calls that take no area light.
+    fn resolve_punctual(
+        &self,
+        camera: Option<PyCamera>,
+        light: Option<PyLight>,
+        call: &str,
+    ) -> PyResult<(Camera, Light)> {
+        match self.resolve(camera, light)? {
+            (c, l, None, _) => Ok((c, l)),
+            (_, _, Some(a), _) => Err(bad(format!(
+                "{call} takes punctual lights only, not a {} light; Scene.render and \
+                 Scene.compare take area lights",
+                a.kind()
+            ))),
+        }
     }
 }
 
@@ -237,13 +239,18 @@ impl PyScene {
     /// The light a frame uses when none is given (the scene's own, or the default).
     #[getter]
     fn light(&self) -> PyResult<PyLight> {
+        let (_, inner, area, samples) = self.resolve(None, None)?;
         Ok(PyLight {
-            inner: self.resolve(None, None)?.1,
+            inner,
+            area,
+            samples,
         })
     }
 
     /// The shadow term of one frame: an `(H, W, 3)` float32 array of RGB transmittance
-    /// towards the light (1 = lit; uncovered pixels 1). The GIL is released meanwhile.
+    /// towards the light (1 = lit; uncovered pixels 1). Under an area light, `raytrace` is
+    /// the soft-shadow reference and the soft techniques sample the light, both with
+    /// the light's `samples` per point. The GIL is released meanwhile.
     #[pyo3(signature = (technique = "afsm".to_string(), camera = None, light = None, params = None))]
     fn render<'py>(
         &self,
@@ -253,16 +260,16 @@ impl PyScene {
         light: Option<PyLight>,
         params: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let (c, l) = self.resolve(camera, light)?;
+        let (c, l, area, light_samples) = self.resolve(camera, light)?;
         let params = params_of(params)?;
         let scene = Arc::clone(&self.inner);
         let vis = py
             .detach(move || -> shadowlab::Result<_> {
                 let mut t = make(&technique, &params)?;
                 let view = ViewSamples::render(&scene, &c);
-                let s = t
-                    .render(&Frame::new(&scene, &c, &l, &view))
-                    .map_err(|e| in_technique(&technique, e))?;
+                let frame =
+                    Frame::new(&scene, &c, &l, &view).with_area(area.as_ref(), light_samples);
+                let s = t.render(&frame).map_err(|e| in_technique(&technique, e))?;
                 Ok(s.visibility)
             })
             .map_err(py_err)?;
@@ -280,8 +287,15 @@ impl PyScene {
         camera: Option<PyCamera>,
         params: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Vec<Bound<'py, PyAny>>> {
-        let (c, l0) = self.resolve(camera, None)?;
+        let (c, l0, _, _) = self.resolve(camera, None)?;
         let params = params_of(params)?;
+        if let Some(a) = lights.iter().find_map(|l| l.area) {
+            return Err(bad(format!(
+                "render_lights takes punctual lights only, not a {} light; render each \
+                 area light with Scene.render",
+                a.kind()
+            )));
+        }
         let lights: Vec<Light> = lights.iter().map(|l| l.inner).collect();
         let scene = Arc::clone(&self.inner);
         let all = py
@@ -320,7 +334,7 @@ impl PyScene {
         triangles: Option<Vec<u32>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let py = points.py();
-        let (_, l) = self.resolve(None, light)?;
+        let (_, l) = self.resolve_punctual(None, light, "Scene.visibility")?;
         let p = vec3s(points, "points")?;
         let n = vec3s(normals, "normals")?;
         let params = params_of(params)?;
@@ -342,6 +356,9 @@ impl PyScene {
     /// one frame: a dict shaped like `metrics.json` (`results[i]` with `mismatch_rate`,
     /// `mean_abs_error`, `time_ms`, `memory_bytes`, ...). `params` maps a technique name
     /// to its parameters.
+    /// Under an area light the reference is the soft-shadow reference with
+    /// the light's `samples` per pixel, and `reference.mean_std_error` states its own
+    /// noise.
     #[pyo3(signature = (techniques = None, camera = None, light = None, params = None, reference_spp = 1, reference_pattern = "grid".to_string()))]
     fn compare<'py>(
         slf: PyRef<'py, Self>,
@@ -353,7 +370,7 @@ impl PyScene {
         reference_pattern: String,
     ) -> PyResult<Bound<'py, PyAny>> {
         let py = slf.py();
-        let (c, l) = slf.resolve(camera, light)?;
+        let (c, l, area, light_samples) = slf.resolve(camera, light)?;
         let names: Vec<String> =
             techniques.unwrap_or_else(|| techniques::ALL.iter().map(|s| s.to_string()).collect());
         let mut per: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
@@ -378,6 +395,8 @@ impl PyScene {
             params: per,
             spp: reference_spp,
             pattern_name: reference_pattern,
+            area,
+            light_samples,
         };
         let scene = Arc::clone(&slf.inner);
         let metrics = py
@@ -393,77 +412,4 @@ impl PyScene {
             self.inner.len()
         )
     }
-}
-
-/// What `Scene.compare` runs: techniques with their parameters, and the reference's
-/// sub-pixel samples.
-struct CompareSpec {
-    names: Vec<String>,
-    params: BTreeMap<String, Vec<(String, String)>>,
-    kind: PatternKind,
-    spp: u32,
-    pattern_name: String,
-}
-
-/// The `metrics.json` of one frame (without the report's image files).
-fn compare_frame(
-    scene: &Scene,
-    camera: &Camera,
-    light: &Light,
-    spec: &CompareSpec,
-) -> shadowlab::Result<Value> {
-    let CompareSpec {
-        names,
-        params,
-        kind,
-        spp,
-        pattern_name,
-    } = spec;
-    let (kind, spp) = (*kind, *spp);
-    let samples = pattern(kind, spp)?;
-    let mut runs = Vec::new();
-    for n in names {
-        runs.push(make(n, params.get(n).map_or(&[][..], |p| p))?);
-    }
-    let view = ViewSamples::render(scene, camera);
-    let frame = Frame::new(scene, camera, light, &view);
-    let t0 = std::time::Instant::now();
-    let reference = Reference::build(scene);
-    let bvh_ms = reference.build_ms;
-    let truth = reference.visibility(&frame, &samples);
-    let ref_ms = t0.elapsed().as_secs_f64() * 1e3;
-    let mut results = Vec::new();
-    for (name, t) in names.iter().zip(runs.iter_mut()) {
-        let t0 = std::time::Instant::now();
-        let s = t.render(&frame).map_err(|e| in_technique(name, e))?;
-        let ms = t0.elapsed().as_secs_f64() * 1e3;
-        let m = measure(&view, &s.visibility, &truth);
-        let stages: serde_json::Map<String, Value> = s
-            .stats
-            .stages_ms
-            .iter()
-            .map(|(k, v)| (k.clone(), json!(v)))
-            .collect();
-        results.push(json!({
-            "technique": t.name(), "label": name, "params": t.params(),
-            "time_ms": ms, "stages_ms": stages, "memory_bytes": s.stats.memory_bytes,
-            "counters": s.stats.counters,
-            "mismatch_rate": m.mismatch_rate, "mean_abs_error": m.mean_abs_error,
-            "mean_abs_error_rgb": m.mean_abs_error_rgb,
-        }));
-    }
-    Ok(json!({
-        "scene": scene.name, "triangles": scene.len(),
-        "width": view.width, "height": view.height,
-        "covered_pixels": view.covered_count(), "camera_pass_ms": view.time_ms,
-        "frames": 1, "threads": rayon::current_num_threads(),
-        "shadowlab_version": env!("CARGO_PKG_VERSION"),
-        "camera": serde_json::to_value(camera).expect("cameras serialize"),
-        "light": serde_json::to_value(light).expect("lights serialize"),
-        "reference": {
-            "technique": "raytrace", "samples_per_pixel": spp, "pattern": pattern_name,
-            "time_ms": ref_ms, "bvh_build_ms": bvh_ms, "trace_ms": ref_ms - bvh_ms,
-        },
-        "results": results,
-    }))
 }

@@ -168,3 +168,44 @@ def test_compare_is_shaped_like_metrics_json():
     for r in m["results"]:
         assert {"time_ms", "stages_ms", "memory_bytes", "counters", "mean_abs_error"} <= set(r)
     assert sl.techniques()[0] == "raytrace"
+
+
+def test_area_lights_give_soft_shadows_measured_against_their_reference():
+    scene = box_scene()
+    rect = sl.Light.rect((0.0, 4.0, 0.0), (1.5, 0.0, 0.0), (0.0, 0.0, 1.5), samples=64)
+    assert rect.kind == "rect" and rect.is_area and rect.samples == 64
+    assert rect.to_dict()["area"]["kind"] == "rect" and rect.to_dict()["samples"] == 64
+    assert not SUN.is_area and SUN.kind == "directional"
+
+    # The reference under an area light has a penumbra: values strictly between 0 and 1,
+    # which a point light at the rectangle's centre does not give.
+    soft = scene.render("raytrace", CAMERA, rect)
+    hard = scene.render("raytrace", CAMERA, sl.Light.point((0.0, 4.0, 0.0)))
+    penumbra = (soft[..., 0] > 0.0) & (soft[..., 0] < 1.0)
+    assert penumbra.mean() > 0.01
+    assert not ((hard[..., 0] > 0.0) & (hard[..., 0] < 1.0)).any()
+
+    # The same soft shadow as a sized point light gives, and deterministic.
+    assert np.array_equal(soft, scene.render("raytrace", CAMERA, rect))
+    sphere = sl.Light.point((0.0, 4.0, 0.0)).sized(0.75, samples=64)
+    assert sphere.kind == "sphere" and sphere.samples == 64
+
+    m = scene.compare(["raytrace", "pcf", "pcss"], CAMERA, rect)
+    assert m["area_light"]["kind"] == "rect"
+    assert m["reference"]["mean_std_error"] > 0.0
+    by = {r["technique"]: r for r in m["results"]}
+    assert by["raytrace"]["mean_abs_error"] == 0.0
+    # PCSS sizes its filter from the light: closer to the soft reference than fixed PCF.
+    assert by["pcss"]["mean_abs_error"] < by["pcf"]["mean_abs_error"]
+
+
+def test_bad_area_lights_are_named():
+    with pytest.raises(sl.ShadowlabError, match="samples"):
+        sl.Light.rect((0, 4, 0), (1, 0, 0), (0, 0, 1), samples=0)
+    with pytest.raises(sl.ShadowlabError, match="radius"):
+        sl.Light.sphere((0, 4, 0), float("nan"))
+    rect = sl.Light.rect((0, 4, 0), (1, 0, 0), (0, 0, 1))
+    with pytest.raises(sl.ShadowlabError, match="already has an area"):
+        rect.sized(1.0)
+    with pytest.raises(sl.ShadowlabError, match="punctual"):
+        box_scene().render_lights("sm", [rect], CAMERA)

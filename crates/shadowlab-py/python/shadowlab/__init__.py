@@ -9,6 +9,11 @@ frame's shadow term is RGB transmittance towards the light, 1 = lit:
 - ``Scene.render_lights(technique, lights)`` -> one ``(H, W, 3)`` array per light;
 - ``Scene.compare(techniques)`` -> a dict shaped like the command line's ``metrics.json``.
 
+A light is punctual (``Light.directional``, ``point``, ``spot``) or has an area
+(``Light.rect``, ``disk``, ``sphere``, or ``light.sized(size)``): under an area light
+``raytrace`` is the soft-shadow reference and ``pcss``, ``afsm-soft`` and the filtered soft
+variants see the light's size; ``compare`` states the reference's own standard error.
+
 Frames are set up as ``shadowlab render`` sets them up, so the same scene and parameters
 give the command line's values bit for bit. Rendering releases the GIL. Bad input raises
 ``ShadowlabError`` (a ``ValueError``) with the command line's one-sentence message.

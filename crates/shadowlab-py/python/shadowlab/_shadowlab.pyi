@@ -39,7 +39,11 @@ class Camera:
         """The same camera with another image size."""
 
 class Light:
-    """A light source; make one with ``directional``, ``point`` or ``spot``."""
+    """A light source: punctual (``directional``, ``point``, ``spot``) or an area light
+    (``rect``, ``disk``, ``sphere``, or a punctual light ``sized``). An area light carries
+    its light samples per point (``samples``, 256 unless given): the soft-shadow reference
+    (``raytrace``) and the soft techniques (``pcss``, ``afsm-soft``, the filtered soft
+    variants) see its area; map-based hard techniques see its centre as a punctual light."""
 
     @staticmethod
     def directional(to_light: Vec3) -> Light:
@@ -50,9 +54,29 @@ class Light:
     @staticmethod
     def spot(position: Vec3, target: Vec3, fov_deg: float) -> Light:
         """A cone of light from ``position`` towards ``target``, ``fov_deg`` wide."""
+    @staticmethod
+    def rect(centre: Vec3, edge_u: Vec3, edge_v: Vec3, samples: int = 256) -> Light:
+        """A parallelogram ``centre + s·edge_u + t·edge_v``, ``s, t`` in ``[-1/2, 1/2]``."""
+    @staticmethod
+    def disk(centre: Vec3, normal: Vec3, radius: float, samples: int = 256) -> Light:
+        """A disk of ``radius`` about ``centre`` facing along ``normal``."""
+    @staticmethod
+    def sphere(centre: Vec3, radius: float, samples: int = 256) -> Light:
+        """A spherical light of ``radius`` about ``centre``."""
+    def sized(self, size: float, samples: int = 256) -> Light:
+        """This punctual light given a size, as ``--light-size``: a point light a sphere of
+        radius ``size``, a spot light a disk facing its target, a directional light a sun
+        of angular diameter ``size`` degrees."""
     @property
     def kind(self) -> str:
-        """``"directional"``, ``"point"`` or ``"spot"``."""
+        """``"directional"``, ``"point"`` or ``"spot"``; an area light's shape (``"rect"``,
+        ``"disk"``, ``"sphere"``, ``"distant"``)."""
+    @property
+    def is_area(self) -> bool:
+        """True for an area light."""
+    @property
+    def samples(self) -> int:
+        """Light samples per point under an area light."""
     def to_dict(self) -> dict[str, Any]:
         """The light as ``metrics.json`` records it."""
 
