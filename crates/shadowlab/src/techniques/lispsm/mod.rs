@@ -175,6 +175,9 @@ impl LightSpacePerspective {
         let d = ext.y.1 - ext.y.0;
         let n = match self.n {
             Some(n) => (n as f64).min(warp::MAX_N_RATIO * d),
+            // An orthographic view has no perspective aliasing to undo: the paper's optimum
+            // is then the limit n → ∞, the uniform map.
+            None if frame.camera.is_orthographic() => warp::MAX_N_RATIO * d,
             None => warp::n_opt(zn.max(frame.camera.near) as f64, d, sin_gamma),
         };
         let ex = basis.transform_point3(frame.camera.eye).x as f64;
