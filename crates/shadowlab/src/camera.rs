@@ -438,4 +438,42 @@ mod tests {
             assert!((c.w - 7.0).abs() < 1e-4);
         }
     }
+
+    #[test]
+    fn orthographic_rays_match_projection_and_keep_t_as_view_depth() {
+        let mut cam = Camera::orthographic(
+            vec3(1.0, 2.0, 3.0),
+            vec3(0.0, 0.5, 0.0),
+            (1.6, 1.0),
+            320,
+            200,
+        );
+        cam.near = 0.1;
+        cam.far = 100.0;
+        cam.validate().unwrap();
+        let m = cam.clip_from_world();
+        for &(x, y) in &[(0.5f32, 0.5f32), (160.0, 100.0), (319.5, 10.25)] {
+            let (o, d) = cam.ray(x, y);
+            assert_eq!(d, cam.forward());
+            assert!(cam.view_depth(o).abs() < 1e-5);
+            let p = o + d * 7.0;
+            assert!((cam.view_depth(p) - 7.0).abs() < 1e-4);
+            let c = m * p.extend(1.0);
+            assert_eq!(c.w, 1.0);
+            let sx = (c.x * 0.5 + 0.5) * 320.0;
+            let sy = (0.5 - c.y * 0.5) * 200.0;
+            assert!(
+                (sx - x).abs() < 1e-3 && (sy - y).abs() < 1e-3,
+                "{sx},{sy} vs {x},{y}"
+            );
+        }
+        for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            let mut c = cam;
+            c.projection = Projection::Orthographic {
+                xmag: bad,
+                ymag: 1.0,
+            };
+            assert!(c.validate().unwrap_err().to_string().contains("xmag"));
+        }
+    }
 }

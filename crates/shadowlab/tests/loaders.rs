@@ -65,6 +65,7 @@ const DATA_MESHES: &[(&str, usize)] = &[
     ("bike/bike.obj", 15_120),
     ("gltf/2CylinderEngine.glb", 121_496),
     ("gltf/Cameras.gltf", 2),
+    ("gltf/orthographic.gltf", 4),
     ("gltf/BoxTextured.glb", 12),
     ("lenient/edges.obj", 8),
     ("lenient/lines.gltf", 3),
