@@ -69,6 +69,11 @@ pub struct SceneArgs {
         allow_negative_numbers = true
     )]
     pub camera_distance: Option<f32>,
+    /// Make the camera orthographic: `auto` (the rectangle the camera frames at its
+    /// target's depth) or half the viewed height in world units; the width follows the
+    /// image's aspect.
+    #[arg(long, value_name = "auto|HALF_HEIGHT", allow_negative_numbers = true)]
+    pub orthographic: Option<String>,
     /// Which of the scene's cameras to use: a glTF file's camera nodes in the order its
     /// node hierarchy is walked (0 = the first).
     #[arg(long = "camera-index", value_name = "N", default_value_t = 0)]

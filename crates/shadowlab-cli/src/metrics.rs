@@ -12,7 +12,7 @@ use serde::de::{MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use shadowlab::area_light::AreaLight;
-use shadowlab::camera::Camera;
+use shadowlab::camera::{Camera, Projection};
 use shadowlab::light::Light;
 use shadowlab::math::Vec3;
 use std::collections::BTreeMap;
@@ -126,8 +126,17 @@ pub struct CameraRecord {
     pub target: Xyz,
     /// Its up direction.
     pub up: Xyz,
-    /// Vertical field of view in degrees.
+    /// `perspective` or `orthographic`.
+    #[serde(default = "perspective")]
+    pub projection: String,
+    /// Vertical field of view in degrees (a perspective camera's).
     pub fov_y_deg: f64,
+    /// An orthographic camera's half width and half height in world units.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub xmag: Option<f64>,
+    /// See `xmag`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ymag: Option<f64>,
     /// Near end of the depth range fitted to the scene.
     pub near: f64,
     /// Far end of the depth range.
@@ -138,13 +147,28 @@ pub struct CameraRecord {
     pub height: u32,
 }
 
+fn perspective() -> String {
+    "perspective".to_string()
+}
+
+/// An orthographic camera's `(xmag, ymag)`.
+fn ortho_extent(c: &Camera) -> Option<(f64, f64)> {
+    match c.projection {
+        Projection::Orthographic { xmag, ymag } => Some((xmag as f64, ymag as f64)),
+        Projection::Perspective => None,
+    }
+}
+
 impl From<&Camera> for CameraRecord {
     fn from(c: &Camera) -> Self {
         CameraRecord {
             eye: xyz(c.eye),
             target: xyz(c.target),
             up: xyz(c.up),
+            projection: c.projection.name().to_string(),
             fov_y_deg: c.fov_y_deg as f64,
+            xmag: ortho_extent(c).map(|e| e.0),
+            ymag: ortho_extent(c).map(|e| e.1),
             near: c.near as f64,
             far: c.far as f64,
             width: c.width,

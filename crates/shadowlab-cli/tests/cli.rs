@@ -465,6 +465,11 @@ fn camera_index_picks_a_gltf_camera_and_is_checked() {
     );
     assert_ne!(c0, c1);
     assert!((c0["fov_y_deg"].as_f64().unwrap() - 0.7f64.to_degrees()).abs() < 1e-3);
+    assert_eq!(c0["projection"], "perspective");
+    assert_eq!(c1["projection"], "orthographic");
+    // The file's ymag kept; --width/--height keep its pixels square.
+    assert_eq!(c1["ymag"].as_f64(), Some(1.0));
+    assert!((c1["xmag"].as_f64().unwrap() - 64.0 / 48.0).abs() < 1e-6);
     assert_bad_input(&run("2", &d.join("s2.json")), "has 2 cameras");
     assert_bad_input(&run("x", &d.join("s3.json")), "--camera-index");
 }

@@ -3,7 +3,7 @@
 
 mod support;
 
-use shadowlab::camera::Camera;
+use shadowlab::camera::{Camera, Projection};
 use shadowlab::light::Light;
 use shadowlab::math::{vec2, Vec3};
 use shadowlab::reference::Reference;
@@ -77,6 +77,13 @@ fn exported_scene_retraced_from_recorded_camera_and_light_gives_the_same_shadow_
             target: v3(&c["target"]),
             up: v3(&c["up"]),
             fov_y_deg: c["fov_y_deg"].as_f64().unwrap() as f32,
+            projection: match c["projection"].as_str().unwrap() {
+                "orthographic" => Projection::Orthographic {
+                    xmag: c["xmag"].as_f64().unwrap() as f32,
+                    ymag: c["ymag"].as_f64().unwrap() as f32,
+                },
+                _ => Projection::Perspective,
+            },
             near: c["near"].as_f64().unwrap() as f32,
             far: c["far"].as_f64().unwrap() as f32,
             width: c["width"].as_u64().unwrap() as u32,

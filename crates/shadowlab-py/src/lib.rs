@@ -14,11 +14,12 @@ mod scene;
 use convert::{bad, py_err, vec3_of, ShadowlabError};
 use pyo3::prelude::*;
 use shadowlab::area_light::{check_light_samples, AreaLight, DEFAULT_LIGHT_SAMPLES};
-use shadowlab::camera::Camera;
+use shadowlab::camera::{Camera, Projection};
 use shadowlab::light::Light;
 
-/// A perspective pinhole camera (pixel `(x, y)` covers `[x, x+1) × [y, y+1)`, row 0 at the
-/// top; `fov_y_deg` is the vertical field of view).
+/// A camera (pixel `(x, y)` covers `[x, x+1) × [y, y+1)`, row 0 at the top): a
+/// perspective pinhole (`fov_y_deg` is the vertical field of view) or, made by
+/// `Camera.orthographic`, parallel rays viewing the rectangle `2·xmag × 2·ymag`.
 #[pyclass(name = "Camera", module = "shadowlab", from_py_object)]
 #[derive(Clone, Copy)]
 pub struct PyCamera {
@@ -47,6 +48,52 @@ impl PyCamera {
         Ok(PyCamera { inner: c })
     }
 
+    /// An orthographic camera at `eye` looking at `target`, viewing the rectangle
+    /// `2·xmag × 2·ymag` (world units) across its view axis; `xmag` defaults to `ymag`
+    /// times the image's aspect.
+    #[staticmethod]
+    #[pyo3(signature = (eye, target, ymag, xmag = None, width = 1024, height = 768))]
+    fn orthographic(
+        eye: &Bound<'_, PyAny>,
+        target: &Bound<'_, PyAny>,
+        ymag: f32,
+        xmag: Option<f32>,
+        width: u32,
+        height: u32,
+    ) -> PyResult<Self> {
+        let xmag = xmag.unwrap_or(ymag * width as f32 / height.max(1) as f32);
+        let c = Camera::orthographic(
+            vec3_of(eye, "camera eye")?,
+            vec3_of(target, "camera target")?,
+            (xmag, ymag),
+            width,
+            height,
+        );
+        c.validate().map_err(py_err)?;
+        Ok(PyCamera { inner: c })
+    }
+
+    /// `"perspective"` or `"orthographic"`.
+    #[getter]
+    fn projection(&self) -> &'static str {
+        self.inner.projection.name()
+    }
+    /// An orthographic camera's half width (`None` for a perspective one).
+    #[getter]
+    fn xmag(&self) -> Option<f32> {
+        match self.inner.projection {
+            Projection::Orthographic { xmag, .. } => Some(xmag),
+            Projection::Perspective => None,
+        }
+    }
+    /// An orthographic camera's half height (`None` for a perspective one).
+    #[getter]
+    fn ymag(&self) -> Option<f32> {
+        match self.inner.projection {
+            Projection::Orthographic { ymag, .. } => Some(ymag),
+            Projection::Perspective => None,
+        }
+    }
     /// Eye position.
     #[getter]
     fn eye(&self) -> [f32; 3] {
@@ -73,16 +120,31 @@ impl PyCamera {
         self.inner.height
     }
 
-    /// The same camera with another image size.
+    /// The same camera with another image size (an orthographic one keeps its `ymag`
+    /// and widens or narrows its `xmag` with the image).
     fn with_size(&self, width: u32, height: u32) -> PyResult<Self> {
         let mut c = self.inner;
         (c.width, c.height) = (width, height);
+        // An orthographic camera keeps its height and its pixels square.
+        if let Projection::Orthographic { ymag, .. } = c.projection {
+            let xmag = ymag * width as f32 / height.max(1) as f32;
+            c.projection = Projection::Orthographic { xmag, ymag };
+        }
         c.validate().map_err(py_err)?;
         Ok(PyCamera { inner: c })
     }
 
     fn __repr__(&self) -> String {
         let c = &self.inner;
+        if let Projection::Orthographic { xmag, ymag } = c.projection {
+            return format!(
+                "Camera.orthographic(eye={:?}, target={:?}, ymag={ymag}, xmag={xmag}, width={}, height={})",
+                c.eye.to_array(),
+                c.target.to_array(),
+                c.width,
+                c.height
+            );
+        }
         format!(
             "Camera(eye={:?}, target={:?}, fov_y_deg={}, width={}, height={})",
             c.eye.to_array(),

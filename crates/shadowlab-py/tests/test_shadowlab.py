@@ -209,3 +209,22 @@ def test_bad_area_lights_are_named():
         rect.sized(1.0)
     with pytest.raises(sl.ShadowlabError, match="punctual"):
         box_scene().render_lights("sm", [rect], CAMERA)
+
+
+def test_orthographic_camera():
+    cam = sl.Camera.orthographic((0.0, 5.0, 7.0), (0.0, 0.0, 0.0), 2.5, width=96, height=72)
+    assert cam.projection == "orthographic" and cam.ymag == 2.5
+    assert abs(cam.xmag - 2.5 * 96 / 72) < 1e-6
+    assert CAMERA.projection == "perspective" and CAMERA.xmag is None and CAMERA.ymag is None
+    scene = box_scene()
+    img = scene.render("afsm", cam, SUN)
+    # Parallel rays, the same exactness: afsm equals the reference, and the box's shadow
+    # is in view.
+    assert np.array_equal(img, scene.render("raytrace", cam, SUN))
+    assert 0.0 < (img[..., 0] == 0.0).mean() < 0.5
+    wide = cam.with_size(144, 72)
+    assert wide.ymag == 2.5 and abs(wide.xmag - 5.0) < 1e-6
+    with pytest.raises(sl.ShadowlabError, match="xmag"):
+        sl.Camera.orthographic((0.0, 5.0, 7.0), (0.0, 0.0, 0.0), 1.0, xmag=0.0)
+    with pytest.raises(sl.ShadowlabError, match="ymag"):
+        sl.Camera.orthographic((0.0, 5.0, 7.0), (0.0, 0.0, 0.0), float("nan"))

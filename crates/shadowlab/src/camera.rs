@@ -1,9 +1,13 @@
-//! The perspective camera and its key-framed paths.
+//! The camera — perspective or orthographic — and its key-framed paths.
 //!
 //! Conventions (also in the README): pixel `(px, py)` covers `[px, px+1) × [py, py+1)`,
 //! row 0 at the top; its primary ray passes through `(px + 0.5, py + 0.5)` on the image
-//! plane; `fov_y_deg` is the vertical field of view. Clip space follows glam's right-handed
-//! conventions with depth in `[0, 1]`.
+//! plane; `fov_y_deg` is the vertical field of view of a perspective camera. An
+//! orthographic camera (glTF's `xmag`, `ymag`: half the width and half the height of the
+//! viewed rectangle) casts parallel rays along its view direction, each starting on the
+//! plane through the eye across the view axis, so that for either projection a primary
+//! ray's parameter is the view depth of the point it reaches. Clip space follows glam's
+//! right-handed conventions with depth in `[0, 1]`; an orthographic camera's clip `w` is 1.
 
 use crate::error::{Error, Result};
 use crate::math::{vec3, Mat4, Vec3};
@@ -22,7 +26,40 @@ pub const MAX_PIXELS: u64 = 1 << 26;
 /// and each keeps its own so that every image stays as it was.
 pub const CAMERA_MIN_FAR: f32 = 1e-3;
 
-/// A perspective pinhole camera.
+/// How a camera projects: through a pinhole (its field of view is the camera's
+/// `fov_y_deg`) or along parallel rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Projection {
+    /// A pinhole at the eye; the vertical field of view is [`Camera::fov_y_deg`].
+    #[default]
+    Perspective,
+    /// Parallel rays along the view direction; the image is the rectangle `2·xmag × 2·ymag`
+    /// (world units) centred on the view axis, as glTF defines them.
+    Orthographic {
+        /// Half the width of the viewed rectangle.
+        xmag: f32,
+        /// Half the height of the viewed rectangle.
+        ymag: f32,
+    },
+}
+
+impl Projection {
+    /// The projection's name as files and command lines spell it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Projection::Perspective => "perspective",
+            Projection::Orthographic { .. } => "orthographic",
+        }
+    }
+
+    /// Whether the rays are parallel.
+    pub fn is_orthographic(&self) -> bool {
+        matches!(self, Projection::Orthographic { .. })
+    }
+}
+
+/// A camera: a pinhole (perspective) or parallel (orthographic) projection.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Camera {
     /// Eye position in world units.
@@ -31,8 +68,12 @@ pub struct Camera {
     pub target: Vec3,
     /// The up direction (need not be orthogonal to the view direction).
     pub up: Vec3,
-    /// Vertical field of view in degrees.
+    /// Vertical field of view in degrees (a perspective camera's; an orthographic one
+    /// keeps it only to return to perspective).
     pub fov_y_deg: f32,
+    /// Perspective (the default) or orthographic.
+    #[serde(default)]
+    pub projection: Projection,
     /// Near plane distance (along the view axis).
     pub near: f32,
     /// Far plane distance (along the view axis).
@@ -61,11 +102,31 @@ impl Camera {
             target,
             up,
             fov_y_deg,
+            projection: Projection::Perspective,
             near: 0.01,
             far: 1000.0,
             width,
             height,
         }
+    }
+
+    /// An orthographic camera at `eye` looking at `target` with +Y up, viewing the
+    /// rectangle `2·xmag × 2·ymag`; near/far as in [`Camera::look_at`].
+    pub fn orthographic(
+        eye: Vec3,
+        target: Vec3,
+        (xmag, ymag): (f32, f32),
+        width: u32,
+        height: u32,
+    ) -> Self {
+        let mut c = Camera::look_at(eye, target, 45.0, width, height);
+        c.projection = Projection::Orthographic { xmag, ymag };
+        c
+    }
+
+    /// Whether the primary rays are parallel.
+    pub fn is_orthographic(&self) -> bool {
+        self.projection.is_orthographic()
     }
 
     /// Checks that the camera can form an image; names the problem otherwise.
@@ -113,6 +174,13 @@ impl Camera {
                 self.fov_y_deg
             )));
         }
+        if let Projection::Orthographic { xmag, ymag } = self.projection {
+            if !(xmag.is_finite() && ymag.is_finite() && xmag > 0.0 && ymag > 0.0) {
+                return Err(Error::param(format!(
+                    "orthographic camera extent xmag {xmag}, ymag {ymag} must be finite and positive"
+                )));
+            }
+        }
         if !(self.near > 0.0 && self.far > self.near) {
             return Err(Error::param(format!(
                 "camera near {} and far {} must satisfy 0 < near < far",
@@ -145,14 +213,25 @@ impl Camera {
         crate::math::look_at_rh(self.eye, self.target, self.up)
     }
 
-    /// Camera space to clip space, depth in [0, 1].
+    /// Camera space to clip space, depth in [0, 1]; clip `w` is the view depth for a
+    /// perspective camera and 1 for an orthographic one.
     pub fn clip_from_view(&self) -> Mat4 {
-        crate::math::perspective_rh(
-            self.fov_y_deg.to_radians(),
-            self.aspect(),
-            self.near,
-            self.far,
-        )
+        match self.projection {
+            Projection::Perspective => crate::math::perspective_rh(
+                self.fov_y_deg.to_radians(),
+                self.aspect(),
+                self.near,
+                self.far,
+            ),
+            Projection::Orthographic { xmag, ymag } => {
+                crate::math::orthographic_rh(-xmag, xmag, -ymag, ymag, self.near, self.far)
+            }
+        }
+    }
+
+    /// The view depth of world point `p`: its distance from the eye along the view axis.
+    pub fn view_depth(&self, p: Vec3) -> f32 {
+        (p - self.eye).dot(self.forward())
     }
 
     /// World to clip space.
@@ -163,21 +242,36 @@ impl Camera {
     /// The (unnormalized) direction of the primary ray through image position `(x, y)` in
     /// pixels (pixel centres at `+0.5`). Its component along `forward` is 1, so the ray
     /// parameter equals the view depth. For many rays, [`Camera::rays`] avoids recomputing
-    /// the basis each time.
+    /// the basis each time. An orthographic camera's rays all run along `forward` and
+    /// start apart: see [`Camera::ray`].
     pub fn ray_direction(&self, x: f32, y: f32) -> Vec3 {
         self.rays().direction(x, y)
+    }
+
+    /// The primary ray through image position `(x, y)`: origin and direction as
+    /// [`RayGenerator::ray`] gives them.
+    pub fn ray(&self, x: f32, y: f32) -> (Vec3, Vec3) {
+        self.rays().ray(x, y)
     }
 
     /// The camera's primary-ray generator.
     pub fn rays(&self) -> RayGenerator {
         let (r, u, f) = self.basis();
-        let th = (self.fov_y_deg.to_radians() * 0.5).tan();
+        let (half_x, half_y, parallel) = match self.projection {
+            Projection::Perspective => {
+                let th = (self.fov_y_deg.to_radians() * 0.5).tan();
+                (th * self.aspect(), th, false)
+            }
+            Projection::Orthographic { xmag, ymag } => (xmag, ymag, true),
+        };
         RayGenerator {
+            eye: self.eye,
             forward: f,
-            right: r * (th * self.aspect()),
-            up: u * th,
+            right: r * half_x,
+            up: u * half_y,
             inv_width: 1.0 / self.width as f32,
             inv_height: 1.0 / self.height as f32,
+            parallel,
         }
     }
 
@@ -190,29 +284,93 @@ impl Camera {
         (self.near, self.far) = crate::math::fit_near_far(depths, CAMERA_MIN_FAR);
     }
 
-    /// Moves the camera along its view ray to `factor` times its distance from its target.
+    /// Moves the camera along its view ray to `factor` times its distance from its target;
+    /// an orthographic camera's extent scales with it, so the framing changes as a
+    /// perspective camera's would at its target.
     pub fn scale_distance(&mut self, factor: f32) {
         self.eye = self.target + (self.eye - self.target) * factor;
+        if let Projection::Orthographic { xmag, ymag } = self.projection {
+            self.projection = Projection::Orthographic {
+                xmag: xmag * factor,
+                ymag: ymag * factor,
+            };
+        }
+    }
+
+    /// The half-extents `(xmag, ymag)` of the rectangle this camera frames at its
+    /// target's depth: an orthographic camera's own, a perspective one's from its field
+    /// of view.
+    pub fn orthographic_extent_at_target(&self) -> (f32, f32) {
+        match self.projection {
+            Projection::Orthographic { xmag, ymag } => (xmag, ymag),
+            Projection::Perspective => {
+                let d = (self.target - self.eye).length();
+                let ymag = d * (self.fov_y_deg.to_radians() * 0.5).tan();
+                (ymag * self.aspect(), ymag)
+            }
+        }
     }
 }
 
-/// Primary-ray directions of a camera, with its basis computed once.
+/// Primary rays of a camera, with its basis computed once.
 #[derive(Clone, Copy, Debug)]
 pub struct RayGenerator {
+    eye: Vec3,
     forward: Vec3,
+    /// The image's right half-extent: at unit depth (perspective) or in world units
+    /// (orthographic).
     right: Vec3,
+    /// The image's upper half-extent, likewise.
     up: Vec3,
     inv_width: f32,
     inv_height: f32,
+    parallel: bool,
 }
 
 impl RayGenerator {
+    /// The offset of image position `(x, y)` from the image centre: at unit depth
+    /// (perspective) or on the eye's plane (orthographic).
+    #[inline]
+    fn offset(&self, x: f32, y: f32) -> Vec3 {
+        let ndc_x = x * self.inv_width * 2.0 - 1.0;
+        let ndc_y = 1.0 - y * self.inv_height * 2.0;
+        self.right * ndc_x + self.up * ndc_y
+    }
+
     /// See [`Camera::ray_direction`].
     #[inline]
     pub fn direction(&self, x: f32, y: f32) -> Vec3 {
-        let ndc_x = x * self.inv_width * 2.0 - 1.0;
-        let ndc_y = 1.0 - y * self.inv_height * 2.0;
-        self.forward + self.right * ndc_x + self.up * ndc_y
+        if self.parallel {
+            self.forward
+        } else {
+            self.forward + self.offset(x, y)
+        }
+    }
+
+    /// The primary ray through image position `(x, y)` as origin and direction: from the
+    /// eye (perspective) or from the point of the eye's plane across the view axis that
+    /// the pixel sees (orthographic). Either way the direction's component along the
+    /// view axis is 1 and the origin's view depth 0, so the ray parameter of a point is its
+    /// view depth.
+    #[inline]
+    pub fn ray(&self, x: f32, y: f32) -> (Vec3, Vec3) {
+        if self.parallel {
+            (self.eye + self.offset(x, y), self.forward)
+        } else {
+            (self.eye, self.forward + self.offset(x, y))
+        }
+    }
+
+    /// The primary ray, through the pixel that sees it, reaching world point `p`: origin
+    /// and direction as [`RayGenerator::ray`] gives them (the direction not normalized).
+    #[inline]
+    pub fn ray_to(&self, p: Vec3) -> (Vec3, Vec3) {
+        if self.parallel {
+            let depth = (p - self.eye).dot(self.forward);
+            (p - self.forward * depth, self.forward)
+        } else {
+            (self.eye, p - self.eye)
+        }
     }
 }
 
@@ -328,6 +486,44 @@ mod tests {
                 let x = if s <= 1.0 { s } else { 1.0 + 2.0 * (s - 1.0) };
                 assert!((c.eye.x - x).abs() < 1e-6, "frame {i} of {n}: {}", c.eye.x);
             }
+        }
+    }
+
+    #[test]
+    fn orthographic_rays_match_projection_and_keep_t_as_view_depth() {
+        let mut cam = Camera::orthographic(
+            vec3(1.0, 2.0, 3.0),
+            vec3(0.0, 0.5, 0.0),
+            (1.6, 1.0),
+            320,
+            200,
+        );
+        cam.near = 0.1;
+        cam.far = 100.0;
+        cam.validate().unwrap();
+        let m = cam.clip_from_world();
+        for &(x, y) in &[(0.5f32, 0.5f32), (160.0, 100.0), (319.5, 10.25)] {
+            let (o, d) = cam.ray(x, y);
+            assert_eq!(d, cam.forward());
+            assert!(cam.view_depth(o).abs() < 1e-5);
+            let p = o + d * 7.0;
+            assert!((cam.view_depth(p) - 7.0).abs() < 1e-4);
+            let c = m * p.extend(1.0);
+            assert_eq!(c.w, 1.0);
+            let sx = (c.x * 0.5 + 0.5) * 320.0;
+            let sy = (0.5 - c.y * 0.5) * 200.0;
+            assert!(
+                (sx - x).abs() < 1e-3 && (sy - y).abs() < 1e-3,
+                "{sx},{sy} vs {x},{y}"
+            );
+        }
+        for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            let mut c = cam;
+            c.projection = Projection::Orthographic {
+                xmag: bad,
+                ymag: 1.0,
+            };
+            assert!(c.validate().unwrap_err().to_string().contains("xmag"));
         }
     }
 }

@@ -6,7 +6,7 @@
 //! What is optional and how it is derived when absent:
 //! - **Triangle ids** (the reference and `afsm` skip a sample's own triangle; `asm`'s id
 //!   test and `subpixel`'s facets need it; shading reads its material): the closest
-//!   triangle along the ray from the eye through the position, traced on the scene's BVH.
+//!   triangle along the primary ray that reaches the position, traced on the scene's BVH.
 //! - **Screen-space derivatives** (`asm` sizes its tiles and `pcf`, `vsm` and `csm` their
 //!   filter footprints by them): where the primary rays through the neighbouring pixel
 //!   centres meet the plane through the position with the pixel's normal — the camera
@@ -21,13 +21,13 @@
 //! face the camera, as the camera pass's are, and normalized only when they are not of
 //! unit length already (so unit inputs are kept bit for bit).
 
-use crate::camera::Camera;
+use crate::camera::{Camera, RayGenerator};
 use crate::error::{Error, Result};
 use crate::math::{gamma, Vec3};
 use crate::raster::NO_TRIANGLE;
 use crate::reference::Reference;
 use crate::scene::Scene;
-use crate::view::ViewSamples;
+use crate::view::{neighbour_offset, ViewSamples};
 
 /// A normal whose squared length is within this of 1 counts as unit length and is kept bit
 /// for bit; others are normalized. Loose enough for normals stored at half precision,
@@ -220,7 +220,7 @@ impl ViewSamples {
                 }
                 t
             }
-            None => derive_triangles(scene, eye, g, &pixel)?,
+            None => derive_triangles(scene, &rays, g, &pixel)?,
         };
         let mut vs = ViewSamples {
             width: g.width,
@@ -244,19 +244,10 @@ impl ViewSamples {
                 Some(e) => e[k],
                 None => derived_error(scene.triangle(vs.triangle[k] as usize), p),
             };
-            // Neighbouring centre rays meet the plane through p at t = n·(p − eye) / n·dir,
-            // exactly as the camera pass computes them.
+            // Neighbouring centre rays meet the plane through p exactly as the camera pass
+            // computes them.
             let (cx, cy) = ((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
-            let plane = nk.dot(p - eye);
-            let at = |dx: f32, dy: f32| {
-                let dir = rays.direction(cx + dx, cy + dy);
-                let t = plane / nk.dot(dir);
-                if t > 0.0 && t.is_finite() {
-                    eye + dir * t - p
-                } else {
-                    Vec3::ZERO
-                }
-            };
+            let at = |dx: f32, dy: f32| neighbour_offset(&rays, nk, p, cx + dx, cy + dy);
             vs.dpdx[k] = g.dpdx.map_or_else(|| at(1.0, 0.0), |d| d[k]);
             vs.dpdy[k] = g.dpdy.map_or_else(|| at(0.0, 1.0), |d| d[k]);
         }
@@ -265,11 +256,11 @@ impl ViewSamples {
     }
 }
 
-/// The triangle seen at each covered pixel: the closest along the ray from the eye through
+/// The triangle seen at each covered pixel: the closest along the primary ray that reaches
 /// the pixel's position.
 fn derive_triangles(
     scene: &Scene,
-    eye: Vec3,
+    rays: &RayGenerator,
     g: &GBuffer,
     pixel: &dyn Fn(usize) -> String,
 ) -> Result<Vec<u32>> {
@@ -282,15 +273,15 @@ fn derive_triangles(
             if !g.coverage[k] {
                 return NO_TRIANGLE;
             }
-            let d = (g.position[k] - eye).normalize_or_zero();
+            let (o, d) = rays.ray_to(g.position[k]);
             reference
-                .closest_hit(eye, d)
+                .closest_hit(o, d.normalize_or_zero())
                 .map_or(NO_TRIANGLE, |h| h.triangle)
         })
         .collect();
     if let Some(k) = (0..ids.len()).find(|&k| g.coverage[k] && ids[k] == NO_TRIANGLE) {
         return Err(Error::param(format!(
-            "{} is covered, but the ray from the eye through its position meets no triangle of scene {}; pass the triangle ids",
+            "{} is covered, but the primary ray through its position meets no triangle of scene {}; pass the triangle ids",
             pixel(k),
             scene.name
         )));

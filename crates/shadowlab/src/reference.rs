@@ -191,7 +191,6 @@ impl<'s> Reference<'s> {
     pub fn visibility(&self, frame: &Frame, samples: &[Vec2]) -> Visibility {
         let view = frame.view;
         let rays = frame.camera.rays();
-        let eye = frame.camera.eye;
         let light = frame.light;
         let (w, h) = (view.width, view.height);
         let rows: Vec<Vec<Vec3>> = (0..h)
@@ -215,8 +214,8 @@ impl<'s> Reference<'s> {
                         let mut sum = Vec3::ZERO;
                         let mut count = 0u32;
                         for s in samples {
-                            let d = rays.direction(x as f32 + s.x, y as f32 + s.y);
-                            if let Some(hit) = self.closest_hit(eye, d) {
+                            let (o, d) = rays.ray(x as f32 + s.x, y as f32 + s.y);
+                            if let Some(hit) = self.closest_hit(o, d) {
                                 let n = facing_normal(self.scene, hit.triangle, d);
                                 sum += self.transmittance(light, &hit.point, n, hit.triangle);
                                 count += 1;

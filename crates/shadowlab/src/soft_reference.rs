@@ -173,7 +173,6 @@ pub fn soft_visibility(
     let view = frame.view;
     let scene = frame.scene;
     let rays = frame.camera.rays();
-    let eye = frame.camera.eye;
     let uvs = light_samples(n_light);
     let (w, h) = (view.width, view.height);
     let spp = pixel_samples.len();
@@ -194,8 +193,8 @@ pub fn soft_visibility(
                     }
                     let mut sums = Sums::default();
                     for (j, s) in pixel_samples.iter().enumerate() {
-                        let d = rays.direction(x as f32 + s.x, y as f32 + s.y);
-                        let Some(hit) = reference.closest_hit(eye, d) else {
+                        let (o, d) = rays.ray(x as f32 + s.x, y as f32 + s.y);
+                        let Some(hit) = reference.closest_hit(o, d) else {
                             continue;
                         };
                         let n = facing_normal(scene, hit.triangle, d);

@@ -66,8 +66,8 @@ fn sample(
     let v = scene.triangle(id as usize);
     let cx = x as f32 + 0.5;
     let cy = y as f32 + 0.5;
-    let d = rays.direction(cx, cy);
-    let hit = intersect_plane(eye, d, v)?;
+    let (o, d) = rays.ray(cx, cy);
+    let hit = intersect_plane(o, d, v)?;
     let sp = SurfacePoint::from_barycentrics(v, hit.b);
     let mut n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
     if n.dot(d) > 0.0 {
@@ -76,23 +76,44 @@ fn sample(
     if !sp.p.is_finite() || n == Vec3::ZERO {
         return None;
     }
-    // Neighbouring centre rays meet the same plane at t = n·(p − eye) / n·dir.
-    let plane = n.dot(sp.p - eye);
-    let at = |dx: f32, dy: f32| {
-        let dir = rays.direction(cx + dx, cy + dy);
-        let t = plane / n.dot(dir);
-        if t > 0.0 && t.is_finite() {
-            eye + dir * t - sp.p
-        } else {
-            Vec3::ZERO
-        }
-    };
+    let at = |dx: f32, dy: f32| neighbour_offset(rays, n, sp.p, cx + dx, cy + dy);
     Some(Sample {
         point: sp,
         normal: n,
         depth: (sp.p - eye).dot(fwd),
         dpdx: at(1.0, 0.0),
         dpdy: at(0.0, 1.0),
+    })
+}
+
+/// Where the primary ray through image position `(x, y)` meets the plane through `p` of
+/// normal `n`, relative to `p`: t = n·(p − origin) / n·dir, as the camera pass computes a
+/// neighbouring pixel's derivative; zero where the ray does not meet the plane ahead.
+pub(crate) fn neighbour_offset(rays: &RayGenerator, n: Vec3, p: Vec3, x: f32, y: f32) -> Vec3 {
+    let (o, dir) = rays.ray(x, y);
+    let t = n.dot(p - o) / n.dot(dir);
+    if t > 0.0 && t.is_finite() {
+        o + dir * t - p
+    } else {
+        Vec3::ZERO
+    }
+}
+
+/// The scene's triangles set up for the camera's rasterization, with view depth as the
+/// attribute the depth test runs on: clip `w` of a perspective camera, the distance from
+/// the eye's plane of an orthographic one (whose clip `w` is 1).
+fn camera_setup(scene: &Scene, camera: &Camera) -> Vec<raster::SetupTriangle> {
+    let clip_from_world = camera.clip_from_world();
+    let ortho = camera.is_orthographic();
+    raster::setup(scene.len(), camera.width, camera.height, |i| {
+        let v = scene.triangle(i);
+        let c = v.map(|p| clip_from_world * p.extend(1.0));
+        let depth = if ortho {
+            v.map(|p| camera.view_depth(p))
+        } else {
+            c.map(|c| c.w)
+        };
+        (c, depth)
     })
 }
 
@@ -108,12 +129,7 @@ impl ViewSamples {
     pub fn try_render(scene: &Scene, camera: &Camera) -> crate::error::Result<Self> {
         let t0 = std::time::Instant::now();
         let (w, h) = (camera.width, camera.height);
-        let clip_from_world = camera.clip_from_world();
-        let setups = raster::setup(scene.len(), w, h, |i| {
-            let c = scene.triangle(i).map(|p| clip_from_world * p.extend(1.0));
-            // The depth test runs on view depth, which is clip w.
-            (c, c.map(|c| c.w))
-        });
+        let setups = camera_setup(scene, camera);
         // An alpha-masked surface is no surface where its texture cuts it out.
         let masked = scene.has_alpha_masks();
         let buf = raster::depth_buffer_where(&setups, w, h, |f| {
@@ -260,11 +276,7 @@ impl ViewLayers {
             out.time_ms = t0.elapsed().as_secs_f64() * 1e3;
             return Ok(out);
         }
-        let clip_from_world = camera.clip_from_world();
-        let setups = raster::setup(scene.len(), w, h, |i| {
-            let c = scene.triangle(i).map(|p| clip_from_world * p.extend(1.0));
-            (c, c.map(|c| c.w))
-        });
+        let setups = camera_setup(scene, camera);
         let see_through =
             |k: usize| view.covered(k) && !scene.material_of(view.triangle[k] as usize).is_opaque();
         // Every fragment of a pixel whose nearest surface is see-through, that surface's own

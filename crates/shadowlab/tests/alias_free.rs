@@ -134,6 +134,8 @@ fn every_shared_mesh_is_covered_by_a_test() {
         "gltf/BoxTextured.glb",
         // Two quads and cameras only: checked for loading elsewhere, too small to shadow.
         "gltf/Cameras.gltf",
+        // Its orthographic camera's afsm-against-reference test is in tests/orthographic.rs.
+        "gltf/orthographic.gltf",
     ];
     let mut found = Vec::new();
     for dir in ["", "fence", "chessboard", "bike", "gltf"] {

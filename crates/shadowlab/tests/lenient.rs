@@ -205,6 +205,7 @@ fn camera_index_picks_among_the_files_cameras_and_names_the_count_when_out_of_ra
     assert_eq!(first, load(&path).unwrap().camera.unwrap());
     // Camera 0 is the perspective one (yfov 0.7 rad), camera 1 the orthographic one.
     assert!((first.fov_y_deg - 0.7f32.to_degrees()).abs() < 1e-4);
+    assert!(!first.is_orthographic() && second.is_orthographic());
     assert_ne!(first, second);
     let e = at(2).unwrap_err();
     assert!(e.is_bad_input());

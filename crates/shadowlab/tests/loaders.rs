@@ -6,7 +6,7 @@
 
 mod support;
 
-use shadowlab::camera::Camera;
+use shadowlab::camera::{Camera, Projection};
 use shadowlab::compare::compare;
 use shadowlab::light::Light;
 use shadowlab::math::{vec2, vec3, Mat4, Vec3};
@@ -65,6 +65,7 @@ const DATA_MESHES: &[(&str, usize)] = &[
     ("bike/bike.obj", 15_120),
     ("gltf/2CylinderEngine.glb", 121_496),
     ("gltf/Cameras.gltf", 2),
+    ("gltf/orthographic.gltf", 4),
     ("gltf/BoxTextured.glb", 12),
     ("lenient/edges.obj", 8),
     ("lenient/lines.gltf", 3),
@@ -493,7 +494,7 @@ fn gltf_cameras_file_uses_its_perspective_camera() {
 }
 
 #[test]
-fn gltf_orthographic_camera_frames_the_same_rectangle() {
+fn gltf_orthographic_camera_loads_as_orthographic() {
     let dir = scratch("gltf-ortho");
     std::fs::copy(data("gltf/simpleSquare.bin"), dir.join("simpleSquare.bin")).unwrap();
     // Cameras.gltf with the perspective camera node dropped, leaving the orthographic one.
@@ -503,27 +504,39 @@ fn gltf_orthographic_camera_frames_the_same_rectangle() {
     let p = dir.join("ortho.gltf");
     std::fs::write(&p, text).unwrap();
     let s = gltf::load(&p).unwrap();
-    let mut c = s.camera.unwrap();
-    assert_eq!(c.fov_y_deg, gltf::ORTHOGRAPHIC_FOV_DEG);
-    // xmag = ymag = 1: a square image.
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let c = s.camera.unwrap();
+    assert_eq!(
+        c.projection,
+        Projection::Orthographic {
+            xmag: 1.0,
+            ymag: 1.0
+        }
+    );
+    // xmag = ymag = 1: a square image; the file's znear and zfar.
     assert_eq!((c.width, c.height), (768, 768));
+    assert_eq!((c.near, c.far), (0.01, 100.0));
     assert!((c.forward() - Vec3::NEG_Z).length() < POSITION_TOLERANCE);
-    c.fit_depth_range(&s.bounds);
-    // At the depth of the scene's centre, the orthographic rectangle (±xmag, ±ymag around
-    // the axis through (0.5, 0.5)) fills the image exactly.
-    let z = s.bounds.center().z;
+    // At every depth the orthographic rectangle (±xmag, ±ymag around the axis through
+    // (0.5, 0.5)) fills the image exactly, and every primary ray runs along the axis.
     let m = c.clip_from_world();
-    for (dx, dy, u, v) in [
-        (-1.0, -1.0, 0.0, 1.0),
-        (1.0, 1.0, 1.0, 0.0),
-        (1.0, -1.0, 1.0, 1.0),
-    ] {
-        let q = m * vec3(0.5 + dx, 0.5 + dy, z).extend(1.0);
-        let (pu, pv) = (q.x / q.w * 0.5 + 0.5, 0.5 - q.y / q.w * 0.5);
-        assert!(
-            (pu - u).abs() < 1e-4 && (pv - v).abs() < 1e-4,
-            "corner ({dx},{dy}) at ({pu},{pv})"
-        );
+    for z in [2.5, 0.0, -40.0] {
+        for (dx, dy, u, v) in [
+            (-1.0, -1.0, 0.0, 1.0),
+            (1.0, 1.0, 1.0, 0.0),
+            (1.0, -1.0, 1.0, 1.0),
+        ] {
+            let q = m * vec3(0.5 + dx, 0.5 + dy, z).extend(1.0);
+            assert_eq!(q.w, 1.0);
+            let (pu, pv) = (q.x * 0.5 + 0.5, 0.5 - q.y * 0.5);
+            assert!(
+                (pu - u).abs() < 1e-4 && (pv - v).abs() < 1e-4,
+                "corner ({dx},{dy}) at depth {z}: ({pu},{pv})"
+            );
+            let (o, d) = c.ray(u * 768.0, v * 768.0);
+            assert_eq!(d, c.forward());
+            assert!((o - vec3(0.5 + dx, 0.5 + dy, 3.0)).length() < 1e-4, "{o}");
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

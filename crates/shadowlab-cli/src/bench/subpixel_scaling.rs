@@ -27,16 +27,16 @@ const PAPER_BUNNY: (u32, u32, u32, [f64; 3], f64) = (3254, 18523, 609_901, [2.1,
 /// of magnitude slower than the sub-pixel method at 32 samples.
 const PAPER_SPEEDUP_AT_32: f64 = 10.0;
 
-/// The same camera turned so that its centre ray passes `(dx, dy)` pixels from the image
-/// centre: every pixel's primary ray then passes (to within a rotation of under a pixel's
+/// The same camera turned (an orthographic one moved) so that its centre ray passes
+/// `(dx, dy)` pixels from the image centre: every pixel's primary ray then passes (to within a rotation of under a pixel's
 /// angle) through its sub-sample at offset `(dx, dy)` from the pixel centre.
 fn jittered(camera: &Camera, dx: f32, dy: f32) -> Camera {
     let mut c = *camera;
-    let dir = camera.ray_direction(
-        camera.width as f32 * 0.5 + dx,
-        camera.height as f32 * 0.5 + dy,
-    );
-    c.target = camera.eye + dir * (camera.target - camera.eye).length();
+    let (cx, cy) = (camera.width as f32 * 0.5, camera.height as f32 * 0.5);
+    let (o, dir) = camera.ray(cx + dx, cy + dy);
+    // An orthographic camera's rays are parallel: it moves across instead.
+    c.eye = camera.eye + (o - camera.ray(cx, cy).0);
+    c.target = c.eye + dir * (camera.target - camera.eye).length();
     c
 }
 

@@ -7,7 +7,7 @@ use crate::failure::{bad_input, InputContext};
 use anyhow::{Context, Result};
 use shadowlab::area_light::{self, AreaLight};
 use shadowlab::auto_light;
-use shadowlab::camera::Camera;
+use shadowlab::camera::{Camera, Projection};
 use shadowlab::light::Light;
 use shadowlab::math::Vec3;
 use shadowlab::scene::{self, Scene};
@@ -205,7 +205,8 @@ pub fn resolve(args: &SceneArgs) -> Result<Setup> {
     })
 }
 
-/// `--width`, `--height`, `--camera` and `--camera-distance` applied to the scene's camera.
+/// `--width`, `--height`, `--camera`, `--orthographic` and `--camera-distance` applied to
+/// the scene's camera.
 fn apply_camera_flags(args: &SceneArgs, camera: &mut Camera) -> Result<()> {
     if let Some(w) = args.width {
         camera.width = w;
@@ -223,6 +224,11 @@ fn apply_camera_flags(args: &SceneArgs, camera: &mut Camera) -> Result<()> {
         camera.eye = parse_vec3(parts[0], "--camera eye")?;
         camera.target = parse_vec3(parts[1], "--camera target")?;
         if let Some(f) = parts.get(2) {
+            if camera.is_orthographic() {
+                return Err(bad_input(format!(
+                    "--camera {c:?} gives a field of view, but the camera is orthographic (its extent is --orthographic's)"
+                )));
+            }
             camera.fov_y_deg = f
                 .trim()
                 .parse()
@@ -239,6 +245,30 @@ fn apply_camera_flags(args: &SceneArgs, camera: &mut Camera) -> Result<()> {
             } else {
                 Vec3::Y
             };
+        }
+    }
+    if let Some(o) = &args.orthographic {
+        let ymag = if o.trim() == "auto" {
+            camera.orthographic_extent_at_target().1
+        } else {
+            let v: f32 = o
+                .trim()
+                .parse()
+                .input_context(|| format!("--orthographic {o:?} is neither auto nor a number"))?;
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad_input(format!(
+                    "--orthographic {o} must be a positive half height"
+                )));
+            }
+            v
+        };
+        camera.projection = Projection::Orthographic { xmag: ymag, ymag };
+    }
+    // An orthographic camera keeps its height and its pixels square.
+    if let Projection::Orthographic { ymag, .. } = camera.projection {
+        let xmag = ymag * camera.aspect();
+        if args.width.is_some() || args.height.is_some() || args.orthographic.is_some() {
+            camera.projection = Projection::Orthographic { xmag, ymag };
         }
     }
     if let Some(f) = args.camera_distance {
@@ -304,5 +334,9 @@ fn check_camera(args: &SceneArgs, scene: &Scene, camera: &Camera) -> Result<()> 
 
 /// True when two cameras see the same view (the image size aside).
 fn same_view(a: &Camera, b: &Camera) -> bool {
-    a.eye == b.eye && a.target == b.target && a.up == b.up && a.fov_y_deg == b.fov_y_deg
+    a.eye == b.eye
+        && a.target == b.target
+        && a.up == b.up
+        && a.fov_y_deg == b.fov_y_deg
+        && a.projection == b.projection
 }

@@ -15,7 +15,8 @@ class ShadowlabError(ValueError):
     """Bad input: one sentence naming the scene, array, parameter, camera or light at fault."""
 
 class Camera:
-    """A perspective pinhole camera looking from ``eye`` at ``target`` (+Y up)."""
+    """A camera looking from ``eye`` at ``target`` (+Y up): a perspective pinhole, or
+    parallel rays when made by ``Camera.orthographic``."""
 
     def __init__(
         self,
@@ -25,6 +26,26 @@ class Camera:
         width: int = 1024,
         height: int = 768,
     ) -> None: ...
+    @staticmethod
+    def orthographic(
+        eye: Vec3,
+        target: Vec3,
+        ymag: float,
+        xmag: Optional[float] = None,
+        width: int = 1024,
+        height: int = 768,
+    ) -> Camera:
+        """An orthographic camera viewing the rectangle ``2·xmag × 2·ymag`` (world units);
+        ``xmag`` defaults to ``ymag`` times the image's aspect."""
+    @property
+    def projection(self) -> str:
+        """``"perspective"`` or ``"orthographic"``."""
+    @property
+    def xmag(self) -> Optional[float]:
+        """An orthographic camera's half width; ``None`` for a perspective one."""
+    @property
+    def ymag(self) -> Optional[float]:
+        """An orthographic camera's half height; ``None`` for a perspective one."""
     @property
     def eye(self) -> list[float]: ...
     @property

@@ -7,7 +7,7 @@
 use crate::args::SceneArgs;
 use crate::config::scene::parse_light;
 use anyhow::Result;
-use shadowlab::camera::Camera;
+use shadowlab::camera::{Camera, Projection};
 use shadowlab::light::Light;
 use shadowlab::math::Vec3;
 use std::path::Path;
@@ -17,9 +17,15 @@ fn vec3_arg(v: Vec3) -> String {
     format!("{},{},{}", v.x, v.y, v.z)
 }
 
-/// The `--camera` value of a camera.
+/// The `--camera` value of a camera (an orthographic one's extent goes to
+/// `--orthographic`).
 pub fn camera_arg(c: &Camera) -> String {
-    format!("{}:{}:{}", vec3_arg(c.eye), vec3_arg(c.target), c.fov_y_deg)
+    match c.projection {
+        Projection::Perspective => {
+            format!("{}:{}:{}", vec3_arg(c.eye), vec3_arg(c.target), c.fov_y_deg)
+        }
+        Projection::Orthographic { .. } => format!("{}:{}", vec3_arg(c.eye), vec3_arg(c.target)),
+    }
 }
 
 /// The `--light` value of a light.
@@ -83,6 +89,9 @@ pub fn render_args(v: &ViewState, output: &Path) -> Vec<String> {
         "--technique".into(),
         v.technique.to_string(),
     ]);
+    if let Projection::Orthographic { ymag, .. } = v.camera.projection {
+        a.extend(["--orthographic".into(), ymag.to_string()]);
+    }
     for (k, val) in v.params {
         a.extend(["--param".into(), format!("{k}={val}")]);
     }

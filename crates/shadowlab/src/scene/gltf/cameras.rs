@@ -1,8 +1,7 @@
-//! glTF cameras as shadowlab cameras: a perspective camera as it is, an orthographic one
-//! approximated by a narrow perspective camera framing the same rectangle.
+//! glTF cameras as shadowlab cameras, perspective or orthographic, as they are.
 
-use super::{CAMERA_DEFAULT_WIDTH, CAMERA_HEIGHT, ORTHOGRAPHIC_FOV_DEG};
-use crate::camera::{Camera, MAX_IMAGE_SIDE};
+use super::{CAMERA_DEFAULT_WIDTH, CAMERA_HEIGHT};
+use crate::camera::{Camera, Projection, MAX_IMAGE_SIDE};
 use crate::error::{Error, Result};
 use crate::math::{Aabb, Mat4, Vec3};
 use gltf::json::validation::Checked;
@@ -15,9 +14,8 @@ pub(super) fn convert_camera(
     index: usize,
     world: Mat4,
     bounds: &Aabb,
-) -> Result<(Camera, Option<String>)> {
+) -> Result<Camera> {
     let fmt = |what: String| Error::format(path, what);
-    let mut note = None;
     let json = &doc.as_json().cameras[index];
     let eye = world.transform_point3(Vec3::ZERO);
     let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
@@ -79,32 +77,30 @@ pub(super) fn convert_camera(
             c
         }
         (gltf::json::camera::Type::Orthographic, _, Some(o)) => {
-            let (xmag, ymag) = (o.xmag.abs(), o.ymag.abs());
+            let (xmag, ymag) = (o.xmag, o.ymag);
             if !(xmag.is_finite() && ymag.is_finite() && xmag > 0.0 && ymag > 0.0) {
                 return Err(fmt(format!(
-                    "camera {index}: orthographic xmag {} and ymag {} must be finite and non-zero",
-                    o.xmag, o.ymag
+                    "camera {index}: orthographic xmag {xmag} and ymag {ymag} must be finite and positive"
+                )));
+            }
+            if !(o.znear.is_finite() && o.znear >= 0.0 && o.zfar.is_finite() && o.zfar > o.znear) {
+                return Err(fmt(format!(
+                    "camera {index}: orthographic znear {} and zfar {} must satisfy 0 <= znear < zfar",
+                    o.znear, o.zfar
                 )));
             }
             let (width, height) = image(xmag / ymag)?;
-            note = Some(format!(
-                "orthographic camera {index} is approximated by a {ORTHOGRAPHIC_FOV_DEG}° perspective camera framing the same rectangle at the scene's centre"
-            ));
-            let plane = center_depth.max(o.znear.max(0.0));
-            let half = (ORTHOGRAPHIC_FOV_DEG.to_radians() * 0.5).tan();
-            // Pull the eye back so the frustum's cross-section at `plane` is the
-            // orthographic rectangle.
-            let back = ymag / half;
-            let target = eye + forward * plane;
-            let eye = target - forward * back;
-            fitted(
-                eye,
-                target,
-                up,
-                ORTHOGRAPHIC_FOV_DEG,
-                (width, height),
-                bounds,
-            )
+            let dist = if center_depth > 0.0 {
+                center_depth
+            } else {
+                1.0
+            };
+            let mut c = fitted(eye, eye + forward * dist, up, 45.0, (width, height), bounds);
+            c.projection = Projection::Orthographic { xmag, ymag };
+            // The file's depth range as it is (a znear of 0 is lifted to the least near
+            // plane below).
+            (c.near, c.far) = (o.znear, o.zfar);
+            c
         }
         _ => {
             return Err(fmt(format!(
@@ -116,7 +112,7 @@ pub(super) fn convert_camera(
     camera
         .validate()
         .map_err(|e| fmt(format!("camera {index}: {e}")))?;
-    Ok((camera, note))
+    Ok(camera)
 }
 
 /// The least near plane of a glTF camera, as a share of its far plane: a file's `znear`

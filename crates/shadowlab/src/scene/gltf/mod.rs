@@ -31,10 +31,10 @@
 //!   its −Z with its +Y up. A perspective camera keeps `yfov`, `znear` and `zfar` (a
 //!   missing `zfar` — an infinite projection — is replaced by the far distance that fits
 //!   the scene); the image is 768 pixels high and as wide as `aspectRatio` says (1024
-//!   without one). An orthographic camera becomes a narrow perspective camera
-//!   ([`ORTHOGRAPHIC_FOV_DEG`]) pulled back along its axis so that, at the depth of the
-//!   scene's centre, it frames exactly the orthographic rectangle `2·xmag × 2·ymag`; the
-//!   image aspect is `xmag / ymag`. The camera's target is placed on its axis at the depth
+//!   without one). An orthographic camera stays orthographic: it views the rectangle
+//!   `2·xmag × 2·ymag` between `znear` and `zfar` (a `znear` of 0 is lifted to a tiny
+//!   share of `zfar`), the image aspect is `xmag / ymag`; an `xmag` or `ymag` that is not
+//!   positive, or a `zfar` not beyond `znear`, is refused. The camera's target is placed on its axis at the depth
 //!   of the scene's centre, so moving it closer or farther keeps the scene in view.
 //! - The first node carrying a `KHR_lights_punctual` light: directional (shining down the
 //!   node's −Z), point (at its origin), or spot (at its origin, down its −Z, with
@@ -44,7 +44,7 @@
 //!
 //! Lenient where nothing that casts a shadow is lost, and saying so: every kind of thing
 //! skipped or approximated above (primitives by mode, morph targets, skins, the alpha
-//! modes, the orthographic stand-in, the spot's inner cone) and every extension the file
+//! modes, the spot's inner cone) and every extension the file
 //! uses that shadowlab does not read is one sentence in [`Scene::warnings`]. A file that
 //! *requires* an extension shadowlab lacks is refused naming it; those it reads are
 //! [`READ_EXTENSIONS`], and [`SHADING_ONLY_EXTENSIONS`] change no shadow. A glTF 1.0
@@ -80,12 +80,6 @@ use crate::math::Mat4;
 use meshes::Primitive;
 use std::path::Path;
 use std::rc::Rc;
-
-/// Vertical field of view of the perspective camera that stands in for an orthographic
-/// one. Narrower is closer to orthographic but puts the eye farther away (a longer depth
-/// range, so coarser depth precision); 10° keeps the perspective distortion across the
-/// frame below 1% of the depth of the framed plane.
-pub const ORTHOGRAPHIC_FOV_DEG: f32 = 10.0;
 
 /// The widest spot cone accepted, in degrees. glTF allows an outer cone angle of up to 90°
 /// (a 180° cone), which no single perspective light view can hold; wider cones are
@@ -228,9 +222,13 @@ pub fn load_with(path: &Path, access: &Access, camera_index: usize) -> Result<Sc
         )));
     }
     if let Some(&(index, world)) = cameras.get(camera_index) {
-        let (camera, note) = cameras::convert_camera(path, &document, index, world, &scene.bounds)?;
-        scene.camera = Some(camera);
-        warnings.extend(note.map(|n| format!("{name}: {n}")));
+        scene.camera = Some(cameras::convert_camera(
+            path,
+            &document,
+            index,
+            world,
+            &scene.bounds,
+        )?);
     }
     if let Some((index, world)) = light {
         let (l, note) = lights::convert_light(path, &document, index, world)?;

@@ -12,6 +12,9 @@
 //! target = [0.0, 0.3, 0.0]
 //! up = [0.0, 1.0, 0.0]             # default +Y
 //! fov_y_deg = 45.0                 # vertical field of view, default 45
+//! # projection = "orthographic"    # default "perspective"; orthographic takes, instead of
+//! # ymag = 1.5                     # fov_y_deg, half the viewed height (required) and
+//! # xmag = 2.0                     # half its width (default ymag × width / height)
 //! width = 1024                     # default 1024
 //! height = 768                     # default 768
 //! near = 0.05                      # near and far: default fitted to the scene

@@ -1,9 +1,9 @@
 //! The `[camera]` and `[light]` sections of a TOML scene.
 
-use super::spec::{CameraSpec, LightKind, LightSpec, V3};
+use super::spec::{CameraSpec, LightKind, LightSpec, ProjectionKind, V3};
 use super::{finite3, Msg, MAX_KEY_FRAMES};
 use crate::area_light::AreaLight;
-use crate::camera::{Camera, CameraKey, CameraPath};
+use crate::camera::{Camera, CameraKey, CameraPath, Projection};
 use crate::light::Light;
 use crate::scene::Scene;
 
@@ -22,6 +22,7 @@ pub(super) fn camera(c: &CameraSpec, scene: &Scene) -> Msg<(Camera, Option<Camer
     if let Some(up) = c.up {
         camera.up = finite3(up, "up")?;
     }
+    camera.projection = projection(c)?;
     camera.fit_depth_range(&scene.bounds);
     match (c.near, c.far) {
         (Some(n), Some(f)) => (camera.near, camera.far) = (n, f),
@@ -62,6 +63,35 @@ pub(super) fn camera(c: &CameraSpec, scene: &Scene) -> Msg<(Camera, Option<Camer
         }
     };
     Ok((camera, path))
+}
+
+/// The camera's projection: perspective unless `projection = "orthographic"`, which takes
+/// `ymag` (half the viewed height) and `xmag` (half the width; default `ymag` times the
+/// image's aspect) instead of `fov_y_deg`.
+fn projection(c: &CameraSpec) -> Msg<Projection> {
+    match c.projection.unwrap_or(ProjectionKind::Perspective) {
+        ProjectionKind::Perspective => {
+            if c.xmag.is_some() || c.ymag.is_some() {
+                return Err(
+                    "`xmag` and `ymag` belong to projection = \"orthographic\"; a perspective camera takes `fov_y_deg`".into(),
+                );
+            }
+            Ok(Projection::Perspective)
+        }
+        ProjectionKind::Orthographic => {
+            if c.fov_y_deg.is_some() {
+                return Err(
+                    "`fov_y_deg` belongs to a perspective camera; an orthographic one takes `ymag` (and `xmag`)".into(),
+                );
+            }
+            let ymag = c
+                .ymag
+                .ok_or("projection = \"orthographic\" needs `ymag`, half the viewed height")?;
+            let aspect = c.width.unwrap_or(1024) as f32 / c.height.unwrap_or(768).max(1) as f32;
+            let xmag = c.xmag.unwrap_or(ymag * aspect);
+            Ok(Projection::Orthographic { xmag, ymag })
+        }
+    }
 }
 
 /// The `[light]` section: a directional, spot or point light, refusing the keys that do

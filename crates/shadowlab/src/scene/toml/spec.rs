@@ -44,12 +44,22 @@ pub(super) struct CameraSpec {
     pub(super) target: V3,
     pub(super) up: Option<V3>,
     pub(super) fov_y_deg: Option<f32>,
+    pub(super) projection: Option<ProjectionKind>,
+    pub(super) xmag: Option<f32>,
+    pub(super) ymag: Option<f32>,
     pub(super) width: Option<u32>,
     pub(super) height: Option<u32>,
     pub(super) near: Option<f32>,
     pub(super) far: Option<f32>,
     pub(super) path: Option<Vec<KeySpec>>,
     pub(super) pace: Option<u32>,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum ProjectionKind {
+    Perspective,
+    Orthographic,
 }
 
 #[derive(Deserialize)]

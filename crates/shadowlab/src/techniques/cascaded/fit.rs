@@ -14,7 +14,7 @@
 //! light to the slice's farthest point (clamped to the scene), so every caster between a
 //! receiver of the slice and the light is inside.
 
-use crate::camera::Camera;
+use crate::camera::{Camera, Projection};
 use crate::light::{pick_up, LightView};
 use crate::math::{look_at_rh, orthographic_rh, Aabb, Mat4, Vec3};
 
@@ -31,36 +31,54 @@ pub fn light_basis(to_light: Vec3, scene: &Aabb) -> Mat4 {
 }
 
 /// The eight world corners of the camera frustum between view depths `d0` and `d1` (along
-/// the view axis).
+/// the view axis): a box for an orthographic camera.
 pub fn slice_corners(camera: &Camera, d0: f32, d1: f32) -> [Vec3; 8] {
     let (r, u, f) = camera.basis();
-    let ty = (camera.fov_y_deg.to_radians() * 0.5).tan();
-    let tx = ty * camera.aspect();
     let mut out = [Vec3::ZERO; 8];
     for (k, o) in out.iter_mut().enumerate() {
         let d = if k < 4 { d0 } else { d1 };
         let sx = if k & 1 == 0 { -1.0 } else { 1.0 };
         let sy = if k & 2 == 0 { -1.0 } else { 1.0 };
-        *o = camera.eye + f * d + r * (sx * tx * d) + u * (sy * ty * d);
+        *o = match camera.projection {
+            Projection::Perspective => {
+                let ty = (camera.fov_y_deg.to_radians() * 0.5).tan();
+                let tx = ty * camera.aspect();
+                camera.eye + f * d + r * (sx * tx * d) + u * (sy * ty * d)
+            }
+            Projection::Orthographic { xmag, ymag } => {
+                camera.eye + f * d + r * (sx * xmag) + u * (sy * ymag)
+            }
+        };
     }
     out
 }
 
 /// The smallest sphere holding the camera slice between `d0` and `d1`: its centre's view
-/// depth and radius. Only the depths, the field of view and the aspect enter, so it is the
-/// same for every camera orientation.
+/// depth and radius. Only the depths and the field of view and aspect (the extent of an
+/// orthographic camera) enter, so it is the same for every camera orientation.
 pub fn slice_sphere(camera: &Camera, d0: f32, d1: f32) -> (f32, f32) {
-    let ty = (camera.fov_y_deg.to_radians() as f64 * 0.5).tan();
-    let tx = ty * camera.aspect() as f64;
-    // k: corner distance from the axis per unit depth.
-    let k2 = tx * tx + ty * ty;
     let (d0, d1) = (d0 as f64, d1 as f64);
-    // The centre on the axis equidistant from the near and far corners, unless the far
-    // face's circle already holds the near corners.
-    let c = (0.5 * (d0 + d1) * (1.0 + k2)).min(d1);
-    let r = ((c - d0).powi(2) + k2 * d0 * d0)
-        .max((d1 - c).powi(2) + k2 * d1 * d1)
-        .sqrt();
+    let (c, r) = match camera.projection {
+        Projection::Perspective => {
+            let ty = (camera.fov_y_deg.to_radians() as f64 * 0.5).tan();
+            let tx = ty * camera.aspect() as f64;
+            // k: corner distance from the axis per unit depth.
+            let k2 = tx * tx + ty * ty;
+            // The centre on the axis equidistant from the near and far corners, unless the
+            // far face's circle already holds the near corners.
+            let c = (0.5 * (d0 + d1) * (1.0 + k2)).min(d1);
+            let r = ((c - d0).powi(2) + k2 * d0 * d0)
+                .max((d1 - c).powi(2) + k2 * d1 * d1)
+                .sqrt();
+            (c, r)
+        }
+        Projection::Orthographic { xmag, ymag } => {
+            // A box: the sphere about its centre through its corners.
+            let (x, y) = (xmag as f64, ymag as f64);
+            let half = 0.5 * (d1 - d0);
+            (0.5 * (d0 + d1), (half * half + x * x + y * y).sqrt())
+        }
+    };
     if !(r > 0.0 && r.is_finite()) {
         return (c as f32, r as f32);
     }

@@ -17,6 +17,12 @@
 //! nearest and farthest view depth of the receivers this frame shows that the light can
 //! reach, read from the camera pass.
 //!
+//! Orthographic cameras: the slices are boxes (the view's rectangle between two depths)
+//! and the stabilized window is the sphere about a box's centre through its corners; the
+//! splits stay the practical scheme's, although an orthographic view's texel demand does
+//! not fall with depth, so its logarithmic share buys nothing there (`lambda=0`, uniform
+//! splits, is the better setting for such views).
+//!
 //! Invariants: every cascade's depth range holds every caster between its slice and the
 //! light; with `stabilize`, each cascade's window is the same size for every camera
 //! orientation and moves by whole texels of a world-fixed light basis; biases are `sm`'s,

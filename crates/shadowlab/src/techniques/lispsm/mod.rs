@@ -17,7 +17,9 @@
 //! `y′²`, so the larger of the two texel sides is used).
 //!
 //! Invariants: every receiver the light reaches maps inside the map; `n → ∞` gives the
-//! uniform map of `sm` (fitted to the same receivers). Departures: the body is the box of
+//! uniform map of `sm` (fitted to the same receivers). Under an orthographic camera there
+//! is no perspective aliasing to undo, and the automatic `n` is that limit (capped at
+//! [`warp::MAX_N_RATIO`] body depths): a uniform map. Departures: the body is the box of
 //! the visible lit receivers (the paper intersects the view frustum with the scene and
 //! the light's extrusion), a tighter fit with the same guarantee since only visible
 //! receivers are looked up; `n` is capped at [`warp::MAX_N_RATIO`] body depths. Spot and
@@ -175,6 +177,9 @@ impl LightSpacePerspective {
         let d = ext.y.1 - ext.y.0;
         let n = match self.n {
             Some(n) => (n as f64).min(warp::MAX_N_RATIO * d),
+            // An orthographic view has no perspective aliasing to undo: the paper's optimum
+            // is then the limit n → ∞, the uniform map.
+            None if frame.camera.is_orthographic() => warp::MAX_N_RATIO * d,
             None => warp::n_opt(zn.max(frame.camera.near) as f64, d, sin_gamma),
         };
         let ex = basis.transform_point3(frame.camera.eye).x as f64;

@@ -12,6 +12,7 @@
 
 use super::fit::frame_of;
 use super::near_plane::Receivers;
+use crate::camera::Projection;
 use crate::frame::Frame;
 use crate::light::Light;
 use crate::math::{pick_up_f64, Aabb, Vec3};
@@ -314,13 +315,24 @@ fn view_frustum(frame: &Frame, (near, far): (f64, f64)) -> Body {
     let (right, up, fwd) = cam.basis();
     let (right, up, fwd) = (right.as_dvec3(), up.as_dvec3(), fwd.as_dvec3());
     let eye = cam.eye.as_dvec3();
-    let th = ((cam.fov_y_deg as f64).to_radians() * 0.5).tan() * (1.0 + TANGENT_WIDENING);
-    let tw = th * cam.aspect() as f64;
+    // Half-extents at unit depth (perspective: the frustum's sides spread with depth) or
+    // in world units (orthographic: a box).
+    let (tw, th, spread) = match cam.projection {
+        Projection::Perspective => {
+            let th = ((cam.fov_y_deg as f64).to_radians() * 0.5).tan() * (1.0 + TANGENT_WIDENING);
+            (th * cam.aspect() as f64, th, true)
+        }
+        Projection::Orthographic { xmag, ymag } => {
+            let widen = 1.0 + TANGENT_WIDENING;
+            (xmag as f64 * widen, ymag as f64 * widen, false)
+        }
+    };
     Body::hexahedron(std::array::from_fn(|i| {
         let d = if i & 4 != 0 { far } else { near };
         let x = if i & 1 != 0 { tw } else { -tw };
         let y = if i & 2 != 0 { th } else { -th };
-        eye + fwd * d + right * (x * d) + up * (y * d)
+        let s = if spread { d } else { 1.0 };
+        eye + fwd * d + right * (x * s) + up * (y * s)
     }))
 }
 

@@ -39,6 +39,15 @@
 //!    the virtual camera's `w`).
 //! 7. The look-up ([`lookup`]): receivers take the same path and compare depths.
 //!
+//! # Orthographic views
+//! With an orthographic camera the post-perspective transform is the camera's orthographic
+//! projection: an affine map, so post-perspective space is the world itself, scaled into
+//! the cube, and there is no perspective aliasing to redistribute. A directional light
+//! stays directional there (`l'.w = 0`), a point light stays a point light in front
+//! (`l'.w = 1`), and `psm` degenerates to a uniform shadow map fitted to the view's body
+//! `H` — `sm` fitted to what the view needs. Nothing needs the virtual shift or the
+//! clipping of step 6 (every point has a finite image), so neither is applied.
+//!
 //! # Depth and bias
 //! The stored depth is the *linear* depth in post-perspective space from the map's near
 //! plane (along the map axis from `q`, or along the light direction for orthographic
@@ -166,7 +175,8 @@ struct Setup {
     post_planes: Mat4,
     /// The virtual camera's clip `w` (its view depth) as a row on world points.
     w_row: Vec4,
-    /// Depth (along the view axis from the virtual eye) below which triangles are clipped.
+    /// Depth (along the view axis from the virtual eye) below which triangles are clipped
+    /// (−∞ for an orthographic view: nothing is).
     clip_depth: f32,
     maps: Vec<PostMap>,
     /// For a cube: map index of each of the six faces (`usize::MAX` when skipped).
@@ -309,7 +319,13 @@ fn build_setup(frame: &Frame, rec: &Receivers, res: u32) -> Option<Setup> {
         dir: light.dir.as_vec3(),
         post_planes: post_from_world.inverse().transpose().as_mat4(),
         w_row: post_from_world.row(3).as_vec4(),
-        clip_depth: (camera.near * CLIP_DEPTH_FRACTION as f64) as f32,
+        // An orthographic view's post-perspective map is affine: every point has a finite
+        // image and nothing is clipped.
+        clip_depth: if frame.camera.is_orthographic() {
+            f32::NEG_INFINITY
+        } else {
+            (camera.near * CLIP_DEPTH_FRACTION as f64) as f32
+        },
         maps,
         cube,
     })

@@ -12,7 +12,7 @@
 //!   point light in front of the viewer) a point light at `q = l'.xyz / l'.w`; `l'.w < 0`
 //!   (from behind) an inverted point light at `q`, whose rays converge.
 
-use crate::camera::Camera;
+use crate::camera::{Camera, Projection};
 use crate::light::Light;
 use crate::math::{look_along_rh_f64, Mat4};
 use glam::{DMat4, DVec3, DVec4};
@@ -73,6 +73,18 @@ fn perspective_gl(fov_y: f64, aspect: f64, near: f64, far: f64) -> DMat4 {
     )
 }
 
+/// The OpenGL orthographic projection (NDC cube `[-1, 1]³`) of the rectangle
+/// `2·xmag × 2·ymag`: an affine map, `w` = 1, so post-perspective space is the world itself
+/// scaled into the cube.
+fn orthographic_gl(xmag: f64, ymag: f64, near: f64, far: f64) -> DMat4 {
+    DMat4::from_cols(
+        DVec4::new(1.0 / xmag, 0.0, 0.0, 0.0),
+        DVec4::new(0.0, 1.0 / ymag, 0.0, 0.0),
+        DVec4::new(0.0, 0.0, 2.0 / (near - far), 0.0),
+        DVec4::new(0.0, 0.0, (far + near) / (near - far), 1.0),
+    )
+}
+
 /// The virtually shifted camera of Section 4.2 and its post-perspective transform.
 pub(super) struct VirtualCamera {
     /// How far the camera was moved back along its view direction.
@@ -96,7 +108,8 @@ impl VirtualCamera {
             .iter()
             .map(|p| (*p - eye).dot(fwd))
             .fold(f64::INFINITY, f64::min);
-        let shift = if min_depth < near * (1.0 - SHIFT_SLACK) {
+        // An orthographic view's map is affine, defined behind the eye as well: no shift.
+        let shift = if min_depth < near * (1.0 - SHIFT_SLACK) && !cam.is_orthographic() {
             near - min_depth
         } else {
             0.0
@@ -104,12 +117,18 @@ impl VirtualCamera {
         let veye = eye - fwd * shift;
         // Near stays, far grows to hold the whole previous frustum.
         let vfar = far + shift;
-        let post_from_world = perspective_gl(
-            (cam.fov_y_deg as f64).to_radians(),
-            cam.aspect() as f64,
-            near,
-            vfar,
-        ) * look_along_rh_f64(veye, fwd, cam.up.as_dvec3());
+        let clip = match cam.projection {
+            Projection::Perspective => perspective_gl(
+                (cam.fov_y_deg as f64).to_radians(),
+                cam.aspect() as f64,
+                near,
+                vfar,
+            ),
+            Projection::Orthographic { xmag, ymag } => {
+                orthographic_gl(xmag as f64, ymag as f64, near, vfar)
+            }
+        };
+        let post_from_world = clip * look_along_rh_f64(veye, fwd, cam.up.as_dvec3());
         VirtualCamera {
             shift,
             near,

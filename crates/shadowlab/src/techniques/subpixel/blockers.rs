@@ -3,7 +3,7 @@
 //! bounded by the planes through its edges and the light, plus its own plane, in the form
 //! the visibility evaluation turns into half-planes on the screen.
 
-use super::facets::RayPlane;
+use super::ray_plane::RayPlane;
 use super::silhouette_edges::Toward;
 use crate::math::Vec3;
 
@@ -17,8 +17,8 @@ pub(super) struct Blocker {
     pub(super) tri: u32,
     /// Its vertices.
     pub(super) v: [Vec3; 3],
-    /// Per plane `(α, m·dx, m·dy, m·d0)` with `α = m·(eye − q)` for the plane
-    /// `m·(X − q) ≥ 0`: three shadow-volume edge planes (inside ≥ 0), then the triangle's
+    /// Per plane its plane part (see the `ray_plane` module; `(m·(eye − q), m·dx, m·dy,
+    /// m·d0)` under a perspective camera) for the plane `m·(X − q) ≥ 0`: three shadow-volume edge planes (inside ≥ 0), then the triangle's
     /// plane (≥ 0 behind the triangle as seen from the light).
     pub(super) planes: [[f32; 4]; 4],
 }
@@ -26,14 +26,7 @@ pub(super) struct Blocker {
 impl Blocker {
     /// `None` for a triangle that casts no area (degenerate, or edge-on to the light).
     pub(super) fn new(tri: u32, v: [Vec3; 3], toward: &Toward, rays: &RayPlane) -> Option<Self> {
-        let plane = |m: Vec3, q: Vec3| {
-            [
-                m.dot(rays.eye - q),
-                m.dot(rays.dx),
-                m.dot(rays.dy),
-                m.dot(rays.d0),
-            ]
-        };
+        let plane = |m: Vec3, q: Vec3| rays.plane(m, q);
         let [a, b, c] = v;
         let mut m4 = (b - a).cross(c - a);
         let ta = toward.at(a);

@@ -11,7 +11,6 @@
 use super::lookup_table::Mask;
 use super::rasterization::{Poly, RASTER_EPS};
 use super::FrameState;
-use crate::camera::Camera;
 use crate::light::LightView;
 use crate::math::{ndc_to_uv, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
@@ -28,46 +27,6 @@ pub const FACET_SHRINK_STEPS: u32 = 4;
 /// beyond 2 (at ½) makes the box too loose to spare the exact facet.
 const MAX_DIVISION_SPREAD: f32 = 0.5;
 
-/// The camera's primary ray directions as an affine function of image position:
-/// `d(x, y) = d0 + dx·x + dy·y` (pixel centres at +0.5).
-pub(super) struct RayPlane {
-    /// The camera position.
-    pub(super) eye: Vec3,
-    /// The direction through the image corner `(0, 0)`.
-    pub(super) d0: Vec3,
-    /// The change of direction per pixel to the right.
-    pub(super) dx: Vec3,
-    /// The change of direction per pixel down.
-    pub(super) dy: Vec3,
-}
-
-impl RayPlane {
-    /// The ray plane of camera `c`.
-    pub(super) fn new(c: &Camera) -> Self {
-        let (r, u, f) = c.basis();
-        let th = (c.fov_y_deg.to_radians() * 0.5).tan();
-        let asp = c.aspect();
-        RayPlane {
-            eye: c.eye,
-            d0: f - r * (th * asp) + u * th,
-            dx: r * (2.0 * th * asp / c.width as f32),
-            dy: -u * (2.0 * th / c.height as f32),
-        }
-    }
-
-    /// The direction through image position `(x, y)`.
-    #[inline]
-    pub(super) fn at(&self, x: f32, y: f32) -> Vec3 {
-        self.d0 + self.dx * x + self.dy * y
-    }
-
-    /// The origin and direction of the ray through image position `(x, y)`.
-    #[inline]
-    pub(super) fn ray(&self, x: f32, y: f32) -> (Vec3, Vec3) {
-        (self.eye, self.at(x, y))
-    }
-}
-
 /// A silhouette pixel's facet and what its visibility evaluation needs.
 pub(super) struct Facet {
     /// Pixel index.
@@ -83,12 +42,14 @@ pub(super) struct Facet {
     pub(super) p: Vec3,
     /// The surface normal there (the tangent plane's).
     pub(super) n: Vec3,
-    /// `−n·d` for the pixel-corner ray and its per-pixel steps: the facet-plane part of
-    /// every half-plane.
+    /// The facet part of every half-plane (see the `ray_plane` module): `−n·d` for the
+    /// pixel-corner ray and its per-pixel steps under a perspective camera, `n·(o − p)`
+    /// and `n·` the origin's steps under an orthographic one.
     pub(super) an: f32,
     pub(super) bn: f32,
     pub(super) cn: f32,
-    /// `−n·(p − eye)` (positive: the facet faces the camera).
+    /// `−n·(p − eye)` under a perspective camera, `−n·f` under an orthographic one
+    /// (positive: the facet faces the camera).
     pub(super) beta: f32,
     /// Samples inside the facet (all unless a grazing facet was shrunk).
     pub(super) valid: u128,
@@ -111,18 +72,12 @@ impl<M> FrameState<'_, M> {
     /// the same kind for its division by `w`. Both factors multiply the linearized box.
     #[inline]
     fn facet_bound(&self, k: usize, x: f32, y: f32, lv: &LightView, c: Vec4) -> Option<(f32, f32)> {
-        let rays = &self.rays;
         let (p, n) = (self.frame.view.position[k], self.frame.view.normal[k]);
-        let dc = rays.at(x + 0.5, y + 0.5);
-        let (gc, gx, gy) = (n.dot(dc), n.dot(rays.dx), n.dot(rays.dy));
-        let r = 0.5 * (gx.abs() + gy.abs()) / gc.abs();
-        if r.is_nan() || r >= MAX_DIVISION_SPREAD {
+        let j = self.rays.tangent_jacobian(n, p, x + 0.5, y + 0.5)?;
+        let (jx, jy, r) = (j.jx, j.jy, j.r);
+        if r >= MAX_DIVISION_SPREAD {
             return None;
         }
-        let beta = n.dot(p - rays.eye);
-        let s = beta / (gc * gc);
-        let jx = (rays.dx * gc - dc * gx) * s;
-        let jy = (rays.dy * gc - dc * gy) * s;
         let f = 1.0 / (1.0 - r);
         let mx = lv.clip_from_world * jx.extend(0.0);
         let my = lv.clip_from_world * jy.extend(0.0);
@@ -162,17 +117,15 @@ impl<M> FrameState<'_, M> {
         }
     }
 
-    /// The facet of candidate pixel `k` (`pixel_width`: the width of a pixel at unit
-    /// depth), or its depth-map test when the projected facet leaves the view or its
-    /// bounding rectangle holds no silhouette texel.
-    fn build_facet(&self, k: usize, pixel_width: f32) -> Result<Facet, f32> {
+    /// The facet of candidate pixel `k`, or its depth-map test when the projected facet
+    /// leaves the view or its bounding rectangle holds no silhouette texel.
+    fn build_facet(&self, k: usize) -> Result<Facet, f32> {
         let (view, rays, w) = (self.frame.view, &self.rays, self.frame.view.width);
         let p = view.position[k];
         let vi = self.maps.select(self.frame.light, p);
         let (x, y) = ((k as u32 % w) as f32, (k as u32 / w) as f32);
         let n = view.normal[k];
-        let beta = n.dot(p - rays.eye);
-        let cap = MAX_FACET_STRETCH * pixel_width * view.depth[k].max(0.0);
+        let cap = rays.pixel_widths(MAX_FACET_STRETCH, view.depth[k]);
         // The footprint on the tangent plane of a square of side `s` about the centre.
         let footprint = |s: f32| -> Option<[Vec3; 4]> {
             let mut c = [Vec3::ZERO; 4];
@@ -180,12 +133,12 @@ impl<M> FrameState<'_, M> {
                 .into_iter()
                 .enumerate()
             {
-                let d = rays.at(x + 0.5 + 0.5 * s * ox, y + 0.5 + 0.5 * s * oy);
+                let (o, d) = rays.ray(x + 0.5 + 0.5 * s * ox, y + 0.5 + 0.5 * s * oy);
                 let nd = n.dot(d);
                 if nd.is_nan() || nd >= 0.0 {
                     return None;
                 }
-                c[i] = rays.eye + d * (beta / nd);
+                c[i] = o + d * (n.dot(p - o) / nd);
                 let dist = (c[i] - p).length();
                 if dist.is_nan() || dist > cap {
                     return None;
@@ -231,7 +184,7 @@ impl<M> FrameState<'_, M> {
                 valid |= 1 << i;
             }
         }
-        let dc = rays.at(x, y);
+        let [an, bn, cn, beta] = rays.facet(n, p, x, y);
         Ok(Facet {
             k: k as u32,
             x,
@@ -240,10 +193,10 @@ impl<M> FrameState<'_, M> {
             own: view.triangle[k],
             p,
             n,
-            an: -n.dot(rays.dx),
-            bn: -n.dot(rays.dy),
-            cn: -n.dot(dc),
-            beta: -beta,
+            an,
+            bn,
+            cn,
+            beta,
             valid,
             depth_max: proj.depth_span(lo.z, hi.z).1,
             poly,
@@ -280,7 +233,6 @@ pub(super) fn non_silhouette_pixels<M: Mask>(st: &FrameState<'_, M>) -> Vec<f32>
 /// paper's bounding-rectangle test on the projected quad). Candidates whose facet turns out
 /// to hold no silhouette texel get their depth-map test in `value` instead.
 pub(super) fn silhouette_facets<M: Mask>(st: &FrameState<'_, M>, value: &mut [f32]) -> Vec<Facet> {
-    let pixel_width = st.rays.dx.length();
     let candidates: Vec<u32> = (0..value.len() as u32)
         .into_par_iter()
         .filter(|&k| value[k as usize].is_nan())
@@ -288,7 +240,7 @@ pub(super) fn silhouette_facets<M: Mask>(st: &FrameState<'_, M>, value: &mut [f3
     let built: Vec<Result<Facet, f32>> = candidates
         .par_iter()
         .with_min_len(64)
-        .map(|&k| st.build_facet(k as usize, pixel_width))
+        .map(|&k| st.build_facet(k as usize))
         .collect();
     let mut facets: Vec<Facet> = Vec::with_capacity(built.len());
     for (&k, b) in candidates.iter().zip(built) {
