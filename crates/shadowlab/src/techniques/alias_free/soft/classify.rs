@@ -108,7 +108,10 @@ pub(super) enum Verdict {
 }
 
 /// The verdict of caster `c` on receiver `r`.
-pub(super) fn classify(r: &Receiver, c: &Caster, ls: &LightSamples) -> Verdict {
+///
+/// `bx` bounds the frame coordinates of the light samples that still matter
+/// (`[x_lo, x_hi, y_lo, y_hi]`): whole-pair decisions are taken over it.
+pub(super) fn classify(r: &Receiver, c: &Caster, ls: &LightSamples, bx: [f32; 4]) -> Verdict {
     let tol = SOFT_TOLERANCE;
     let w = ls.w;
     let rel = c.v.map(|v| v - r.o);
@@ -129,7 +132,7 @@ pub(super) fn classify(r: &Receiver, c: &Caster, ls: &LightSamples) -> Verdict {
         m_f,
     ];
     if fo.abs() <= m_o {
-        return grazing(r, c, ls, f_plane, fo.abs() + m_o, s_max);
+        return grazing(r, c, bx, f_plane, fo.abs() + m_o, s_max);
     }
     // Oriented so the inner side is positive: the edge planes' orientation is the sign of
     // (v₀ − o)·((v₁ − o) × (v₂ − o)) = −fo, and "beyond" is the side opposite to o.
@@ -138,13 +141,13 @@ pub(super) fn classify(r: &Receiver, c: &Caster, ls: &LightSamples) -> Verdict {
     let mut count = 0;
     let mut add = |p: Plane| -> bool {
         let p = [sigma * p[0], sigma * p[1], sigma * p[2], p[3]];
-        let spread = (p[0].abs() + p[1].abs()) * ls.ext;
-        if p[2] + spread < -p[3] {
+        let (lo, hi) = range(&p, bx);
+        if hi < -p[3] {
             // Every sample is outside.
             return false;
         }
         // Kept unless every sample is inside (a NaN is kept: it certifies nothing).
-        if !(p[2] - spread > p[3]) {
+        if lo.is_nan() || lo <= p[3] {
             planes[count] = p;
             count += 1;
         }
@@ -173,9 +176,8 @@ pub(super) fn classify(r: &Receiver, c: &Caster, ls: &LightSamples) -> Verdict {
 /// The verdict for a receiver in the triangle's plane (within the margins): a miss when
 /// it lies outside the triangle by more than a ray to the light can move in the plane
 /// while it is that close to it, else the rays decide. `d_o` bounds |fo|.
-fn grazing(r: &Receiver, c: &Caster, ls: &LightSamples, f: Plane, d_o: f32, s_max: f32) -> Verdict {
-    let spread = (f[0].abs() + f[1].abs()) * ls.ext;
-    let (lo, hi) = (f[2] - spread, f[2] + spread);
+fn grazing(r: &Receiver, c: &Caster, bx: [f32; 4], f: Plane, d_o: f32, s_max: f32) -> Verdict {
+    let (lo, hi) = range(&f, bx);
     // The light's least distance from the plane, times |nt|.
     let fm = if lo > 0.0 {
         lo
@@ -184,7 +186,7 @@ fn grazing(r: &Receiver, c: &Caster, ls: &LightSamples, f: Plane, d_o: f32, s_ma
     } else {
         0.0
     };
-    if !(fm > f[3]) {
+    if fm.is_nan() || fm <= f[3] {
         return Verdict::Grazing;
     }
     // A ray crosses the plane within this distance of o (similar triangles).
@@ -200,10 +202,50 @@ fn grazing(r: &Receiver, c: &Caster, ls: &LightSamples, f: Plane, d_o: f32, s_ma
     Verdict::Grazing
 }
 
+/// The least and greatest value of plane `p` over the box `bx` of frame coordinates.
+fn range(p: &Plane, bx: [f32; 4]) -> (f32, f32) {
+    let (x0, x1) = (p[0] * bx[0], p[0] * bx[1]);
+    let (y0, y1) = (p[1] * bx[2], p[1] * bx[3]);
+    (
+        p[2] + x0.min(x1) + y0.min(y1),
+        p[2] + x0.max(x1) + y0.max(y1),
+    )
+}
+
+/// The box `[x_lo, x_hi, y_lo, y_hi]` of the light samples set in `live`.
+pub(super) fn live_box(live: &[u64], ls: &LightSamples) -> [f32; 4] {
+    let mut b = [
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+    ];
+    for (w, &bits) in live.iter().enumerate() {
+        let mut bits = bits;
+        while bits != 0 {
+            let i = w * 64 + bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let (x, y) = (ls.xs[i], ls.ys[i]);
+            b = [b[0].min(x), b[1].max(x), b[2].min(y), b[3].max(y)];
+        }
+    }
+    b
+}
+
 /// For every light sample, whether it is certainly inside all `planes` (`inside`) and
 /// certainly outside one (`outside`), one bit a sample.
-pub(super) fn masks(planes: &[Plane], ls: &LightSamples, inside: &mut [u64], outside: &mut [u64]) {
+/// Words where `live` is empty are left alone.
+pub(super) fn masks(
+    planes: &[Plane],
+    ls: &LightSamples,
+    live: &[u64],
+    inside: &mut [u64],
+    outside: &mut [u64],
+) {
     for (wi, (xc, yc)) in ls.xs.chunks(64).zip(ls.ys.chunks(64)).enumerate() {
+        if live[wi] == 0 {
+            continue;
+        }
         let m = xc.len();
         let mut inn = [true; 64];
         let mut out = [false; 64];

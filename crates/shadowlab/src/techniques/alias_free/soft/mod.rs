@@ -59,13 +59,13 @@ mod raster;
 mod samples;
 mod transform;
 
+use super::super::{find_param, Frame, ParamSpec, ShadowTechnique, Shadows, Stats};
 use super::bsp::Bsp;
 use super::{AliasFree, Buffers, CULL_TOLERANCE, DEFAULT_LEAF_SIZE, MAX_LEAF_SIZE};
 use crate::area_light::check_light_samples;
 use crate::error::{Error, Result};
 use crate::frame::Visibility;
 use crate::math::Vec3;
-use crate::techniques::{find_param, Frame, ParamSpec, ShadowTechnique, Shadows, Stats};
 use raster::{rasterize, Counters, Ctx};
 use samples::LightSamples;
 use std::collections::BTreeMap;

@@ -19,7 +19,7 @@
 //! sample order divided by `N`, the reference's arithmetic.
 
 use super::super::bsp::{Bsp, Node};
-use super::classify::{classify, masks, Caster, Receiver, Verdict};
+use super::classify::{classify, live_box, masks, Caster, Receiver, Verdict};
 use super::footprint::{footprint, Footprint};
 use super::samples::{bounding_corners, frame_at, LightSamples};
 use super::transform::LitMasks;
@@ -95,6 +95,8 @@ struct Unit<'a> {
     surf: Vec<(SurfacePoint, Vec3)>,
     lit: Vec<u64>,
     dark: Vec<u64>,
+    /// Per sample, the box of its live light samples' frame coordinates.
+    boxes: Vec<[f32; 4]>,
     /// Light samples left lit, per leaf (local node index).
     alive: Vec<u32>,
     done: Vec<bool>,
@@ -154,11 +156,13 @@ impl<'a> Unit<'a> {
             }
             !n.is_leaf()
         });
+        let boxes = lit.chunks(words).map(|m| live_box(m, ctx.ls)).collect();
         Unit {
             ctx,
             bsp,
             root,
             first,
+            boxes,
             rec,
             surf,
             dark: vec![0; lit.len()],
@@ -244,6 +248,7 @@ impl<'a> Unit<'a> {
             self.counters.pairs += 1;
             let hidden = self.pair(j, c, &live[..words]);
             if hidden {
+                self.boxes[j] = live_box(&self.live(j)[..words], self.ctx.ls);
                 if self.live(j).iter().all(|&w| w == 0) {
                     self.alive[local] -= 1;
                 }
@@ -256,7 +261,7 @@ impl<'a> Unit<'a> {
     fn pair(&mut self, j: usize, c: &Cast, live: &[u64]) -> bool {
         let ls = self.ctx.ls;
         let words = ls.words;
-        let verdict = classify(&self.rec[j], &c.c, ls);
+        let verdict = classify(&self.rec[j], &c.c, ls, self.boxes[j]);
         let mut inside = [0u64; MAX_WORDS];
         let mut outside = [0u64; MAX_WORDS];
         match verdict {
@@ -270,7 +275,13 @@ impl<'a> Unit<'a> {
             }
             Verdict::Planes(p, count) => {
                 self.counters.pairs_masked += 1;
-                masks(&p[..count], ls, &mut inside[..words], &mut outside[..words]);
+                masks(
+                    &p[..count],
+                    ls,
+                    live,
+                    &mut inside[..words],
+                    &mut outside[..words],
+                );
             }
             Verdict::Grazing => self.counters.pairs_grazing += 1,
         }
