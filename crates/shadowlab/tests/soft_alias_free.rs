@@ -74,7 +74,11 @@ fn random_light(rng: &mut Lcg, trial: usize) -> (AreaLight, Light) {
     let above = vec3(rng.next() - 0.5, 2.0 + rng.next(), rng.next() - 0.5);
     let area = match trial % 5 {
         0 => AreaLight::Rect {
-            centre: if trial.is_multiple_of(2) { above } else { rng.v() * 0.3 },
+            centre: if trial.is_multiple_of(2) {
+                above
+            } else {
+                rng.v() * 0.3
+            },
             edge_u: vec3(0.5 + rng.next(), 0.2 * rng.next(), 0.0),
             edge_v: vec3(0.1 * rng.next(), 0.0, 0.3 + rng.next()),
         },
@@ -84,7 +88,11 @@ fn random_light(rng: &mut Lcg, trial: usize) -> (AreaLight, Light) {
             radius: 0.2 + 0.8 * rng.next(),
         },
         2 => AreaLight::Sphere {
-            centre: if trial.is_multiple_of(2) { above } else { rng.v() * 0.4 },
+            centre: if trial.is_multiple_of(2) {
+                above
+            } else {
+                rng.v() * 0.4
+            },
             radius: 0.1 + 0.5 * rng.next(),
         },
         3 => AreaLight::Distant {

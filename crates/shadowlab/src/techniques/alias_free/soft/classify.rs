@@ -233,8 +233,9 @@ pub(super) fn live_box(live: &[u64], ls: &LightSamples) -> [f32; 4] {
 }
 
 /// For every light sample, whether it is certainly inside all `planes` (`inside`) and
-/// certainly outside one (`outside`), one bit a sample.
-/// Words where `live` is empty are left alone.
+/// certainly outside one (`outside`), one bit a sample, 64 samples a pass over fixed-size
+/// arrays (so the loops vectorize). Words where `live` is empty are left alone; planes
+/// with a non-finite coefficient certify nothing.
 pub(super) fn masks(
     planes: &[Plane],
     ls: &LightSamples,
@@ -242,24 +243,38 @@ pub(super) fn masks(
     inside: &mut [u64],
     outside: &mut [u64],
 ) {
-    for (wi, (xc, yc)) in ls.xs.chunks(64).zip(ls.ys.chunks(64)).enumerate() {
+    if !planes.iter().flatten().all(|c| c.is_finite()) {
+        return;
+    }
+    for (wi, (xc, yc)) in ls
+        .xs
+        .chunks_exact(64)
+        .zip(ls.ys.chunks_exact(64))
+        .enumerate()
+    {
         if live[wi] == 0 {
             continue;
         }
-        let m = xc.len();
-        let mut inn = [true; 64];
-        let mut out = [false; 64];
+        let (Ok(xc), Ok(yc)): (Result<&[f32; 64], _>, Result<&[f32; 64], _>) =
+            (xc.try_into(), yc.try_into())
+        else {
+            continue;
+        };
+        // Least value of (E − margin) and of (E + margin) over the planes.
+        let mut lo = [f32::INFINITY; 64];
+        let mut hi = [f32::INFINITY; 64];
         for p in planes {
-            for j in 0..m {
+            for j in 0..64 {
                 let e = p[0] * xc[j] + p[1] * yc[j] + p[2];
-                inn[j] &= e - p[3] > 0.0;
-                out[j] |= e + p[3] < 0.0;
+                let (a, b) = (e - p[3], e + p[3]);
+                lo[j] = if a < lo[j] { a } else { lo[j] };
+                hi[j] = if b < hi[j] { b } else { hi[j] };
             }
         }
         let (mut i, mut o) = (0u64, 0u64);
-        for j in 0..m {
-            i |= u64::from(inn[j]) << j;
-            o |= u64::from(out[j]) << j;
+        for j in 0..64 {
+            i |= u64::from(lo[j] > 0.0) << j;
+            o |= u64::from(hi[j] < 0.0) << j;
         }
         inside[wi] = i;
         outside[wi] = o;

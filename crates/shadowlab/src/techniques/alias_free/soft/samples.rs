@@ -20,7 +20,7 @@ use crate::math::{Vec2, Vec3};
 pub(super) struct LightSamples {
     /// The reference's sample positions in `[0, 1)²`.
     pub(super) uvs: Vec<Vec2>,
-    /// Frame coordinates of each sample.
+    /// Frame coordinates of each sample, padded with zeros to whole words.
     pub(super) xs: Vec<f32>,
     pub(super) ys: Vec<f32>,
     /// Bitmask words per view sample: ⌈N / 64⌉.
@@ -58,13 +58,18 @@ impl LightSamples {
                 )
             }
         };
+        // Padded to whole words (the padding is never a live sample).
+        let words = uvs.len().div_ceil(64);
+        let (mut xs, mut ys): (Vec<f32>, Vec<f32>) = (xs, ys);
+        xs.resize(words * 64, 0.0);
+        ys.resize(words * 64, 0.0);
         let w = if matches!(area, AreaLight::Distant { .. }) {
             0.0
         } else {
             1.0
         };
         LightSamples {
-            words: uvs.len().div_ceil(64),
+            words,
             uvs,
             xs,
             ys,
