@@ -196,7 +196,7 @@ pub struct TechniquesArgs {
 #[derive(clap::Args, Debug, Clone)]
 pub struct BenchArgs {
     /// The suite: afsm-scaling, subpixel-scaling, csm-table, asm-walkthrough, psm-lights,
-    /// engines.
+    /// engines, soft-exact.
     pub suite: String,
     /// Also write the rows as JSON to this file.
     #[arg(long)]

@@ -339,7 +339,7 @@ pub fn sobol_point(i: u32) -> Vec2 {
 
 /// Shirley and Chiu's concentric map of the unit square onto the unit disk: area
 /// preserving, and it keeps the square's strata compact.
-fn concentric_disk(uv: Vec2) -> Vec2 {
+pub(crate) fn concentric_disk(uv: Vec2) -> Vec2 {
     let o = uv * 2.0 - Vec2::ONE;
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
@@ -355,7 +355,7 @@ fn concentric_disk(uv: Vec2) -> Vec2 {
 
 /// Two unit vectors perpendicular to the unit vector `n` and to each other (Duff et al.
 /// 2017: branchless, continuous away from `n.z = -1`).
-fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
+pub(crate) fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
     let sign = 1f32.copysign(n.z);
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;

@@ -8,6 +8,7 @@ pub mod asm_walkthrough;
 pub mod csm_table;
 pub mod engines;
 pub mod psm_lights;
+pub mod soft_exact;
 pub mod subpixel_scaling;
 
 use serde_json::{json, Value};

@@ -212,17 +212,20 @@ pub enum Suite {
     PsmLights,
     /// Every technique at equal memory.
     Engines,
+    /// Exact soft shadows against the hard technique once per light sample.
+    SoftExact,
 }
 
 impl Suite {
     /// Every suite, as the command line names them.
-    pub const ALL: [(Suite, &'static str); 6] = [
+    pub const ALL: [(Suite, &'static str); 7] = [
         (Suite::AfsmScaling, "afsm-scaling"),
         (Suite::SubpixelScaling, "subpixel-scaling"),
         (Suite::CsmTable, "csm-table"),
         (Suite::AsmWalkthrough, "asm-walkthrough"),
         (Suite::PsmLights, "psm-lights"),
         (Suite::Engines, "engines"),
+        (Suite::SoftExact, "soft-exact"),
     ];
 
     /// The suite's name.

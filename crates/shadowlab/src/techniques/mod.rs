@@ -39,6 +39,10 @@ pub const ALL: &[&str] = &[
 /// their base technique's parameter table.
 pub const SOFT_VARIANTS: &[&str] = &["vsm-soft", "evsm-soft", "msm-soft", "csm-soft"];
 
+/// The exact soft technique: `afsm` with an area light's light samples (equal to the soft
+/// reference). Not in the default set.
+pub const EXACT_SOFT: &str = "afsm-soft";
+
 /// A technique by name, with default parameters.
 pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
     Ok(match name {
@@ -56,6 +60,7 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
         "cascaded" => Box::new(cascaded::Cascaded::default()),
         "lispsm" => Box::new(lispsm::LightSpacePerspective::default()),
         "pcss" => Box::new(pcss::Pcss::default()),
+        EXACT_SOFT => Box::new(alias_free::soft::SoftAliasFree::default()),
         // The soft filtered variants: the same techniques with `soft=true`.
         "vsm-soft" | "evsm-soft" | "msm-soft" | "csm-soft" => {
             let mut t = create(name.trim_end_matches("-soft"))?;
@@ -64,7 +69,7 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
         }
         _ => {
             return Err(Error::param(format!(
-                "unknown technique {name:?}: known techniques are {}, {}",
+                "unknown technique {name:?}: known techniques are {}, {}, {EXACT_SOFT}",
                 ALL.join(", "),
                 SOFT_VARIANTS.join(", ")
             )))
@@ -81,7 +86,7 @@ mod tests {
     /// accept every default.
     #[test]
     fn every_technique_has_a_table_that_matches_its_parameters() {
-        for name in ALL {
+        for name in ALL.iter().chain(&[EXACT_SOFT]) {
             let mut t = create(name).unwrap();
             let table = t.param_specs();
             let params = t.params();

@@ -76,6 +76,7 @@ mod dump;
 mod raster;
 mod setup;
 mod shadow_ray;
+pub mod soft;
 mod transform;
 
 use super::{find_param, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, Visibility};

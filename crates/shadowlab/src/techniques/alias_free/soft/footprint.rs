@@ -1,0 +1,141 @@
+//! Stage three's set-up for exact soft alias-free shadows: each caster triangle's
+//! *penumbra footprint* on a light image plane (the soft counterpart of the hard
+//! technique's triangle set-up), a conservative rectangle and minimum depth that every
+//! view sample some light sample's ray through the triangle can start from lies in.
+//!
+//! Why it bounds: if the segment from a point `p` to a light point `l` passes through the
+//! triangle at `t`, then `p − c = (t − c) + s·(t − l)` with `s ≥ 0` (`c` the light's
+//! centre, the projection's origin). Seen from `c`, `p` lies in the cone spanned by the
+//! vectors `vₖ − c` and `vₖ − cⱼ` (vertices `vₖ`, corners `cⱼ` of the light's bounding
+//! shape, which holds every `l`): when all of them point into the face, the cone's image is
+//! the hull of their projections (its rectangle is kept), and the depth of `p` is at least
+//! that of the nearest vertex. A cone that leaves the face is not bounded (the whole face).
+//! For a distant light (orthographic plane) `p = t + s·d` with `d` in the light's cone:
+//! the triangle's rectangle widened by the depth range times the tangent of its angular
+//! radius.
+//!
+//! Every bound is widened by [`SOFT_TOLERANCE`] of the distances involved: a larger
+//! widening only sends more pairs to the exact classification.
+
+use super::super::bsp::{Bsp, Node};
+use super::super::transform::{Ortho, Persp, Projection};
+use super::SOFT_TOLERANCE;
+use crate::math::Vec3;
+
+/// A caster's penumbra footprint on one plane.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Footprint {
+    pub(super) lo: [f32; 2],
+    pub(super) hi: [f32; 2],
+    /// No sample nearer the light than this can be shadowed.
+    pub(super) zmin: f32,
+    /// Triangle index.
+    pub(super) id: u32,
+}
+
+impl Footprint {
+    /// True when the footprint may hold a sample of `n`.
+    #[inline]
+    pub(super) fn overlaps(&self, n: &Node) -> bool {
+        self.lo[0] <= n.hi[0]
+            && self.hi[0] >= n.lo[0]
+            && self.lo[1] <= n.hi[1]
+            && self.hi[1] >= n.lo[1]
+            && self.zmin <= n.zmax
+    }
+
+    /// True when the footprint may hold the sample at `(u, v)` of depth `z`.
+    #[inline]
+    pub(super) fn holds(&self, u: f32, v: f32, z: f32) -> bool {
+        (u >= self.lo[0])
+            & (u <= self.hi[0])
+            & (v >= self.lo[1])
+            & (v <= self.hi[1])
+            & (z >= self.zmin)
+    }
+}
+
+/// The footprint of triangle `id` (vertices `v`) on `bsp`'s plane; `corners` bound the
+/// light, `tan_radius` is a distant light's angular extent. `None` when it can shadow no
+/// sample of the plane.
+pub(super) fn footprint(
+    bsp: &Bsp,
+    corners: &[Vec3],
+    tan_radius: f32,
+    v: [Vec3; 3],
+    id: u32,
+) -> Option<Footprint> {
+    let root = bsp.nodes.first()?;
+    let f = match &bsp.proj {
+        Projection::Ortho(o) => ortho(o, bsp.scale, root, tan_radius, v, id),
+        Projection::Persp(p) => perspective(p, bsp.scale, corners, v, id),
+    }?;
+    f.overlaps(root).then_some(f)
+}
+
+/// On a distant light's orthographic plane.
+fn ortho(
+    o: &Ortho,
+    scale: f32,
+    root: &Node,
+    tan_radius: f32,
+    v: [Vec3; 3],
+    id: u32,
+) -> Option<Footprint> {
+    let p = v.map(|p| o.coords(p));
+    let tol = SOFT_TOLERANCE * scale;
+    let zmin = p[0][2].min(p[1][2]).min(p[2][2]) - tol;
+    let reach = (root.zmax - zmin).max(0.0) * tan_radius * (1.0 + SOFT_TOLERANCE) + tol;
+    let lo = [0, 1].map(|a| p[0][a].min(p[1][a]).min(p[2][a]) - reach);
+    let hi = [0, 1].map(|a| p[0][a].max(p[1][a]).max(p[2][a]) + reach);
+    Some(Footprint { lo, hi, zmin, id })
+}
+
+/// On a perspective face about the light's centre.
+fn perspective(
+    pp: &Persp,
+    scale: f32,
+    corners: &[Vec3],
+    v: [Vec3; 3],
+    id: u32,
+) -> Option<Footprint> {
+    let rot = |d: Vec3| Vec3::new(d.dot(pp.s), d.dot(pp.t), d.dot(pp.f));
+    let mut gens = [Vec3::ZERO; 3 + 3 * 8];
+    let mut count = 0;
+    for p in v {
+        gens[count] = pp.coords(p);
+        count += 1;
+        for &c in corners {
+            gens[count] = rot(p - c);
+            count += 1;
+        }
+    }
+    let gens = &gens[..count];
+    let tol = SOFT_TOLERANCE;
+    if gens.iter().all(|g| g.z < -tol * g.length()) {
+        // The cone lies behind the face: no sample of it is in reach.
+        return None;
+    }
+    if gens.iter().any(|g| g.z <= tol * (g.length() + scale)) {
+        return Some(Footprint {
+            lo: [f32::NEG_INFINITY; 2],
+            hi: [f32::INFINITY; 2],
+            zmin: f32::NEG_INFINITY,
+            id,
+        });
+    }
+    let zmin = v
+        .iter()
+        .map(|p| pp.coords(*p).z)
+        .fold(f32::INFINITY, f32::min)
+        - tol * scale;
+    let mut lo = [f32::INFINITY; 2];
+    let mut hi = [f32::NEG_INFINITY; 2];
+    for g in gens {
+        let (u, w) = (g.x / g.z, g.y / g.z);
+        let d = 4.0 * tol * (1.0 + u.abs() + w.abs()) * (1.0 + (g.length() + scale) / g.z);
+        lo = [lo[0].min(u - d), lo[1].min(w - d)];
+        hi = [hi[0].max(u + d), hi[1].max(w + d)];
+    }
+    Some(Footprint { lo, hi, zmin, id })
+}
