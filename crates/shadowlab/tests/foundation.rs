@@ -90,7 +90,7 @@ fn camera_pass_into_kept_buffers_equals_a_fresh_pass() {
     // Another view first, so every kept buffer holds stale values where the next view
     // shows other surfaces or none; then a size change, then back.
     let mut other = c;
-    other.eye = other.eye + vec3(0.3, 0.5, -0.2);
+    other.eye += vec3(0.3, 0.5, -0.2);
     other.fit_depth_range(&s.bounds);
     let mut kept = ViewSamples::render(&s, &other);
     kept.render_into(&s, &c).unwrap();
