@@ -29,13 +29,20 @@ pub struct Pass {
 }
 
 impl Pass {
-    /// Renders frame `i` of `setup`.
-    pub fn render(setup: &Setup, i: usize) -> Result<Pass> {
+    /// Renders frame `i` of `setup`, into the buffers of the `previous` frame's camera
+    /// pass when one is handed back (a sequence keeps one pass's memory across frames).
+    pub fn render(setup: &Setup, i: usize, previous: Option<Pass>) -> Result<Pass> {
         let camera = setup.camera_at(i);
         camera
             .validate()
             .with_context(|| format!("frame {i} of the camera path of {}", setup.scene.name))?;
-        let view = ViewSamples::try_render(&setup.scene, &camera)?;
+        let view = match previous {
+            Some(mut p) => {
+                p.view.render_into(&setup.scene, &camera)?;
+                p.view
+            }
+            None => ViewSamples::try_render(&setup.scene, &camera)?,
+        };
         let layers = if setup.layers {
             Some(ViewLayers::render(&setup.scene, &camera, &view)?)
         } else {

@@ -13,7 +13,9 @@ use crate::math::{orient2d_i64, Vec4};
 use rayon::prelude::*;
 
 mod buffers;
-pub use buffers::{coverage_count, depth_buffer, depth_buffer_where, DepthBuffer, NO_TRIANGLE};
+pub use buffers::{
+    coverage_count, depth_buffer, depth_buffer_where, nearest_ids_where, DepthBuffer, NO_TRIANGLE,
+};
 
 /// Side of a square tile in pixels.
 pub const TILE: u32 = 64;

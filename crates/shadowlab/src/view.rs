@@ -42,6 +42,16 @@ pub struct ViewSamples {
     pub time_ms: f64,
 }
 
+/// `v` resized to `n` elements: kept as it is when it has that length already (its
+/// contents are overwritten by the caller), else refilled with `fill`.
+fn fit<T: Clone>(v: &mut Vec<T>, n: usize, fill: T, what: &str) -> Result<()> {
+    if v.len() != n {
+        *v = Vec::new();
+        *v = crate::limits::try_filled(n, fill, what)?;
+    }
+    Ok(())
+}
+
 /// The surface of triangle `id` seen through the centre of pixel `(x, y)`.
 struct Sample {
     point: SurfacePoint,
@@ -127,53 +137,78 @@ impl ViewSamples {
     /// Runs the camera pass, or fails with a sentence when its per-pixel buffers cannot
     /// be allocated.
     pub fn try_render(scene: &Scene, camera: &Camera) -> crate::error::Result<Self> {
-        let t0 = std::time::Instant::now();
-        let (w, h) = (camera.width, camera.height);
-        let setups = camera_setup(scene, camera);
-        // An alpha-masked surface is no surface where its texture cuts it out.
-        let masked = scene.has_alpha_masks();
-        let buf = raster::depth_buffer_where(&setups, w, h, |f| {
-            !masked || !scene.cut_out(f.id as usize, f.bary())
-        });
-        let n = w as usize * h as usize;
-        let what = format!("the {w}x{h} camera pass");
-        let zeros = || crate::limits::try_filled(n, Vec3::ZERO, &what);
         let mut vs = ViewSamples {
-            width: w,
-            height: h,
-            triangle: buf.id,
-            position: zeros()?,
-            position_error: zeros()?,
-            normal: zeros()?,
-            depth: crate::limits::try_filled(n, f32::INFINITY, &what)?,
-            dpdx: zeros()?,
-            dpdy: zeros()?,
+            width: 0,
+            height: 0,
+            triangle: Vec::new(),
+            position: Vec::new(),
+            position_error: Vec::new(),
+            normal: Vec::new(),
+            depth: Vec::new(),
+            dpdx: Vec::new(),
+            dpdy: Vec::new(),
             camera: *camera,
             time_ms: 0.0,
         };
+        vs.render_into(scene, camera)?;
+        Ok(vs)
+    }
+
+    /// Runs the camera pass into these samples' buffers, kept from an earlier frame: a
+    /// sequence or an interactive view that owns one `ViewSamples` reuses memory that is
+    /// already mapped instead of page-faulting tens of megabytes in every frame, and every
+    /// per-pixel array is written once a frame (buffers of another size are reallocated).
+    /// The result equals [`ViewSamples::try_render`]'s bit for bit. Fails with a sentence
+    /// when the buffers cannot be allocated.
+    pub fn render_into(&mut self, scene: &Scene, camera: &Camera) -> crate::error::Result<()> {
+        let t0 = std::time::Instant::now();
+        let (w, h) = (camera.width, camera.height);
+        let n = w as usize * h as usize;
+        let what = format!("the {w}x{h} camera pass");
+        fit(&mut self.triangle, n, NO_TRIANGLE, &what)?;
+        for v in [
+            &mut self.position,
+            &mut self.position_error,
+            &mut self.normal,
+            &mut self.dpdx,
+            &mut self.dpdy,
+        ] {
+            fit(v, n, Vec3::ZERO, &what)?;
+        }
+        fit(&mut self.depth, n, f32::INFINITY, &what)?;
+        (self.width, self.height, self.camera) = (w, h, *camera);
+        let setups = camera_setup(scene, camera);
+        // An alpha-masked surface is no surface where its texture cuts it out.
+        let masked = scene.has_alpha_masks();
+        raster::nearest_ids_where(&setups, w, h, &mut self.triangle, |f| {
+            !masked || !scene.cut_out(f.id as usize, f.bary())
+        });
         let eye = camera.eye;
         let fwd = camera.forward();
         let rays = camera.rays();
         let wu = w as usize;
         if wu > 0 {
-            // Each row written in place by one task: no per-row intermediate, no serial copy.
-            vs.triangle
+            // Each row written in place by one task, every pixel once: no per-row
+            // intermediate, no serial copy, no clearing pass.
+            self.triangle
                 .par_chunks_mut(wu)
-                .zip(vs.position.par_chunks_mut(wu))
-                .zip(vs.position_error.par_chunks_mut(wu))
-                .zip(vs.normal.par_chunks_mut(wu))
-                .zip(vs.depth.par_chunks_mut(wu))
-                .zip(vs.dpdx.par_chunks_mut(wu))
-                .zip(vs.dpdy.par_chunks_mut(wu))
+                .zip(self.position.par_chunks_mut(wu))
+                .zip(self.position_error.par_chunks_mut(wu))
+                .zip(self.normal.par_chunks_mut(wu))
+                .zip(self.depth.par_chunks_mut(wu))
+                .zip(self.dpdx.par_chunks_mut(wu))
+                .zip(self.dpdy.par_chunks_mut(wu))
                 .enumerate()
                 .for_each(
                     |(y, ((((((triangle, position), error), normal), depth), dpdx), dpdy))| {
                         for x in 0..wu {
                             let id = triangle[x];
-                            if id == NO_TRIANGLE {
-                                continue;
-                            }
-                            match sample(scene, &rays, eye, fwd, id, x as u32, y as u32) {
+                            let s = if id == NO_TRIANGLE {
+                                None
+                            } else {
+                                sample(scene, &rays, eye, fwd, id, x as u32, y as u32)
+                            };
+                            match s {
                                 Some(s) => {
                                     position[x] = s.point.p;
                                     error[x] = s.point.error;
@@ -182,14 +217,27 @@ impl ViewSamples {
                                     dpdx[x] = s.dpdx;
                                     dpdy[x] = s.dpdy;
                                 }
-                                None => triangle[x] = NO_TRIANGLE,
+                                None => {
+                                    triangle[x] = NO_TRIANGLE;
+                                    position[x] = Vec3::ZERO;
+                                    error[x] = Vec3::ZERO;
+                                    normal[x] = Vec3::ZERO;
+                                    depth[x] = f32::INFINITY;
+                                    dpdx[x] = Vec3::ZERO;
+                                    dpdy[x] = Vec3::ZERO;
+                                }
                             }
                         }
                     },
                 );
         }
-        vs.time_ms = t0.elapsed().as_secs_f64() * 1e3;
-        Ok(vs)
+        self.time_ms = t0.elapsed().as_secs_f64() * 1e3;
+        Ok(())
+    }
+
+    /// Bytes of the per-pixel arrays the camera pass writes.
+    pub fn bytes_per_pixel() -> usize {
+        2 * std::mem::size_of::<u32>() + 5 * std::mem::size_of::<Vec3>()
     }
 
     /// True when pixel `k` shows a surface.

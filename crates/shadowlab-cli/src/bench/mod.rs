@@ -12,6 +12,9 @@ pub mod soft_exact;
 pub mod subpixel_scaling;
 
 use serde_json::{json, Value};
+use shadowlab::camera::Camera;
+use shadowlab::scene::Scene;
+use shadowlab::view::ViewSamples;
 
 /// What a suite produced.
 pub struct BenchReport {
@@ -30,6 +33,55 @@ pub fn median_ms<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     }
     times.sort_by(f64::total_cmp);
     (times[times.len() / 2], last.expect("ran at least once"))
+}
+
+/// The camera pass timed as a sequence runs it (its buffers kept from the frame before),
+/// beside the memory-bandwidth bound of writing its per-pixel arrays once: the same bytes
+/// written by a parallel fill over the same threads, measured in the same run. Prints one
+/// line and returns the camera pass's median time (ms) and its JSON figures.
+pub fn camera_pass_line(scene: &Scene, camera: &Camera, repeat: usize) -> (f64, Value) {
+    use rayon::prelude::*;
+    let mut view = ViewSamples::render(scene, camera);
+    let (camera_ms, _) = median_ms(repeat.max(3), || {
+        view.render_into(scene, camera)
+            .expect("the buffers of the first pass are kept")
+    });
+    let pixels = camera.width as usize * camera.height as usize;
+    let bytes = pixels * ViewSamples::bytes_per_pixel();
+    let mut stream = vec![0u8; bytes];
+    let mut value = 0u8;
+    let (bound_ms, _) = median_ms(repeat.max(3), || {
+        value = value.wrapping_add(1);
+        stream
+            .par_chunks_mut(1 << 16)
+            .for_each(|c| c.fill(std::hint::black_box(value)));
+    });
+    let mpix = pixels as f64 / 1e6;
+    println!(
+        "camera pass {:.1} ms, {:.1} ms/MPixel vs measured bandwidth bound {:.2} ms/MPixel (writing its {} bytes a pixel once, {:.1} GB/s): {:.1}x the bound",
+        camera_ms,
+        camera_ms / mpix,
+        bound_ms / mpix,
+        ViewSamples::bytes_per_pixel(),
+        bytes as f64 / bound_ms / 1e6,
+        camera_ms / bound_ms
+    );
+    let figures = json!({
+        "camera_pass_ms": camera_ms,
+        "camera_pass_ms_per_mpixel": camera_ms / mpix,
+        "bandwidth_bound_ms_per_mpixel": bound_ms / mpix,
+        "bytes_per_pixel": ViewSamples::bytes_per_pixel(),
+    });
+    (camera_ms, figures)
+}
+
+/// "met" or "missed", for the target lines every suite prints.
+pub fn verdict(met: bool) -> &'static str {
+    if met {
+        "met"
+    } else {
+        "missed"
+    }
 }
 
 /// Facts about the machine a benchmark ran on.

@@ -123,7 +123,7 @@ fn render_frames(
     let mut last = None;
     for i in 0..frames {
         bar.set_message(format!("frame {}/{frames} camera pass", i + 1));
-        let pass = Pass::render(setup, i)?;
+        let pass = Pass::render(setup, i, last.take().map(|(p, _)| p))?;
         let sink = folder.dump.as_ref().map(|d| d as &dyn DumpSink);
         let frame = pass.frame(setup, i, sink);
         for run in runs.iter_mut() {

@@ -54,7 +54,7 @@ fn render_frames(setup: &Setup, out: &RenderOutputs, run: &mut Run) -> Result<Pa
     };
     let mut last = None;
     for i in 0..setup.frames {
-        let pass = Pass::render(setup, i)?;
+        let pass = Pass::render(setup, i, last.take())?;
         let sink = dump.as_ref().map(|d| d as &dyn DumpSink);
         run.render(&pass.frame(setup, i, sink), !sequence)?;
         if let Some(anim) = animation.as_mut() {

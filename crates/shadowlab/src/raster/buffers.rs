@@ -1,7 +1,7 @@
 //! What the rasterizer fills most often: the nearest surface's depth and triangle per pixel
 //! (the camera pass and every light-space depth map), and a fragment count per pixel.
 
-use super::{rasterize, Fragment, SetupTriangle};
+use super::{rasterize, Fragment, SetupTriangle, TileRect};
 
 /// A depth buffer with the id of the nearest triangle per pixel.
 #[derive(Clone, Debug)]
@@ -32,19 +32,20 @@ pub fn depth_buffer(tris: &[SetupTriangle], width: u32, height: u32) -> DepthBuf
     depth_buffer_where(tris, width, height, |_| true)
 }
 
-/// [`depth_buffer`] of the fragments `keep` accepts only: an alpha-masked caster's
-/// fragments are dropped where its texture cuts it out
-/// (`|f| !scene.cut_out(f.id as usize, f.bary())`, through the caller's id mapping).
-pub fn depth_buffer_where<K>(
+/// A tile's nearest depth and id per pixel, row-major.
+type NearestTile = (Vec<f32>, Vec<u32>);
+
+/// The nearest kept fragment's depth and id per pixel of each 64×64 tile.
+fn nearest_tiles<K>(
     tris: &[SetupTriangle],
     width: u32,
     height: u32,
     keep: K,
-) -> DepthBuffer
+) -> Vec<(TileRect, NearestTile)>
 where
     K: Fn(&Fragment) -> bool + Sync,
 {
-    let tiles = rasterize(
+    rasterize(
         tris,
         width,
         height,
@@ -59,7 +60,40 @@ where
                 id[k] = f.id;
             }
         },
-    );
+    )
+}
+
+/// Copies each tile's rows of `of(state)` into the `width`-wide image `out`.
+fn merge_tiles<S, T: Copy>(
+    tiles: &[(TileRect, S)],
+    width: u32,
+    out: &mut [T],
+    of: impl Fn(&S) -> &[T],
+) {
+    for (r, state) in tiles {
+        let src_all = of(state);
+        for y in r.y0..r.y1 {
+            let src = ((y - r.y0) * r.width()) as usize;
+            let dst = (y * width + r.x0) as usize;
+            let w = r.width() as usize;
+            out[dst..dst + w].copy_from_slice(&src_all[src..src + w]);
+        }
+    }
+}
+
+/// [`depth_buffer`] of the fragments `keep` accepts only: an alpha-masked caster's
+/// fragments are dropped where its texture cuts it out
+/// (`|f| !scene.cut_out(f.id as usize, f.bary())`, through the caller's id mapping).
+pub fn depth_buffer_where<K>(
+    tris: &[SetupTriangle],
+    width: u32,
+    height: u32,
+    keep: K,
+) -> DepthBuffer
+where
+    K: Fn(&Fragment) -> bool + Sync,
+{
+    let tiles = nearest_tiles(tris, width, height, keep);
     let n = width as usize * height as usize;
     let mut out = DepthBuffer {
         width,
@@ -67,16 +101,25 @@ where
         depth: vec![f32::INFINITY; n],
         id: vec![NO_TRIANGLE; n],
     };
-    for (r, (d, id)) in tiles {
-        for y in r.y0..r.y1 {
-            let src = ((y - r.y0) * r.width()) as usize;
-            let dst = (y * width + r.x0) as usize;
-            let w = r.width() as usize;
-            out.depth[dst..dst + w].copy_from_slice(&d[src..src + w]);
-            out.id[dst..dst + w].copy_from_slice(&id[src..src + w]);
-        }
-    }
+    merge_tiles(&tiles, width, &mut out.depth, |s| &s.0);
+    merge_tiles(&tiles, width, &mut out.id, |s| &s.1);
     out
+}
+
+/// The ids of [`depth_buffer_where`] alone, written into `ids` (`width × height`, every
+/// pixel written once): the camera pass keeps that buffer across frames and needs no
+/// depths.
+pub fn nearest_ids_where<K>(
+    tris: &[SetupTriangle],
+    width: u32,
+    height: u32,
+    ids: &mut [u32],
+    keep: K,
+) where
+    K: Fn(&Fragment) -> bool + Sync,
+{
+    let tiles = nearest_tiles(tris, width, height, keep);
+    merge_tiles(&tiles, width, ids, |s| &s.1);
 }
 
 /// How many fragments each pixel received (for coverage tests and overdraw pictures).

@@ -49,7 +49,12 @@ pub fn draw(
     camera.fit_depth_range(&scene.bounds);
     camera.validate()?;
     let mut stages_ms = Vec::new();
-    let kept = previous.filter(|p| p.camera == camera && p.layers.is_some() == layers);
+    let (kept, spare) = match previous {
+        Some(p) if p.camera == camera && p.layers.is_some() == layers => (Some(p), None),
+        // A moved camera renders into the last pass's buffers.
+        Some(p) => (None, Some(p.view)),
+        None => (None, None),
+    };
     let (view, layer_samples) = match kept {
         Some(p) => {
             stages_ms.push(("camera pass (kept)".to_string(), 0.0));
@@ -57,7 +62,13 @@ pub fn draw(
         }
         None => {
             let t0 = Instant::now();
-            let view = ViewSamples::try_render(scene, &camera)?;
+            let view = match spare {
+                Some(mut v) => {
+                    v.render_into(scene, &camera)?;
+                    v
+                }
+                None => ViewSamples::try_render(scene, &camera)?,
+            };
             let l = if layers {
                 Some(ViewLayers::render(scene, &camera, &view)?)
             } else {

@@ -31,7 +31,14 @@ impl ShadowRay {
     /// The ray `o + t·dir`, `t ∈ (0, t_max)`, with the set-up of
     /// [`crate::math::intersect_triangle`].
     pub(super) fn new(o: Vec3, dir: Vec3, t_max: f32, own: u32, pixel: u32) -> Self {
-        let RayShear { k, s } = RayShear::new(dir);
+        Self::sheared(o, RayShear::new(dir), t_max, own, pixel)
+    }
+
+    /// [`Self::new`] for a direction whose shear is formed already (every ray of a
+    /// directional light shares one).
+    #[inline]
+    pub(super) fn sheared(o: Vec3, shear: RayShear, t_max: f32, own: u32, pixel: u32) -> Self {
+        let RayShear { k, s } = shear;
         ShadowRay {
             o: o.to_array(),
             s,

@@ -9,12 +9,19 @@
 //! spot light's own perspective plane, or, for a point light, the cube face its direction
 //! falls on (one plane per face: "multiple maps are generally needed for omni-directional
 //! light sources").
+//!
+//! A directional light's samples (without layers) take the block path of `wide.rs`: one
+//! shear for every shadow ray, the offset and the projection on arrays of coordinates, with
+//! an AVX2 variant chosen at run time — the same operations, so the same bits.
+
+mod wide;
 
 use super::shadow_ray::ShadowRay;
 use super::{Buffers, Frame};
 use crate::light::{cube_face, pick_up, Light, CUBE_FACES};
-use crate::math::{Aabb, Vec3};
+use crate::math::{Aabb, RayShear, Vec3};
 use rayon::prelude::*;
+use wide::Directional;
 
 /// How world points map to one light image plane.
 #[derive(Clone, Copy, Debug)]
@@ -140,13 +147,26 @@ fn shadow_rays(
         }
         _ => (view.surface_point(k), view.normal[k], view.triangle[k]),
     };
+    // A directional light's samples, without layers, take the block path: one shear for
+    // every ray, the per-sample arithmetic on arrays (the same bits).
+    let wide = match (*light, proj, layers) {
+        (Light::Directional { to_light }, Some(Projection::Ortho(ortho)), None) => {
+            Some(Directional {
+                view,
+                to_light,
+                shear: RayShear::new(to_light),
+                ortho: *ortho,
+            })
+        }
+        _ => None,
+    };
+    let block = |b: usize| b * TRANSFORM_BLOCK..((b + 1) * TRANSFORM_BLOCK).min(n);
     // Count the lit samples of each block, so every block writes its own slice.
     let counts: Vec<usize> = (0..n.div_ceil(TRANSFORM_BLOCK))
         .into_par_iter()
-        .map(|b| {
-            (b * TRANSFORM_BLOCK..((b + 1) * TRANSFORM_BLOCK).min(n))
-                .filter(|&k| lit(k))
-                .count()
+        .map(|b| match &wide {
+            Some(d) => block(b).filter(|&k| d.lit(k)).count(),
+            None => block(b).filter(|&k| lit(k)).count(),
         })
         .collect();
     let total: usize = counts.iter().sum();
@@ -181,8 +201,13 @@ fn shadow_rays(
         Light::Directional { .. } => Vec3::ZERO,
     };
     jobs.into_par_iter().for_each(|(b, first, r, p, f)| {
+        if let Some(d) = &wide {
+            // Every face byte stays 0: one plane.
+            d.block(block(b), first, r, p);
+            return;
+        }
         let mut j = 0;
-        for k in b * TRANSFORM_BLOCK..((b + 1) * TRANSFORM_BLOCK).min(n) {
+        for k in block(b) {
             if !lit(k) {
                 continue;
             }
