@@ -24,7 +24,7 @@
 //! test unless it lies outside the triangle by more than any ray from it to the light
 //! could travel within the margins before leaving the plane.
 
-use super::samples::{Frame3, LightSamples};
+use super::samples::{grow, union, Frame3, FrameBox, LightSamples, EMPTY_BOX, GROUP};
 use super::SOFT_TOLERANCE;
 use crate::math::Vec3;
 
@@ -212,30 +212,37 @@ fn range(p: &Plane, bx: [f32; 4]) -> (f32, f32) {
     )
 }
 
-/// The box `[x_lo, x_hi, y_lo, y_hi]` of the light samples set in `live`.
-pub(super) fn live_box(live: &[u64], ls: &LightSamples) -> [f32; 4] {
-    let mut b = [
-        f32::INFINITY,
-        f32::NEG_INFINITY,
-        f32::INFINITY,
-        f32::NEG_INFINITY,
-    ];
+/// The box `[x_lo, x_hi, y_lo, y_hi]` of the light samples set in `live` (a whole live
+/// group contributes its stored box, the same minimum and maximum over the same samples).
+pub(super) fn live_box(live: &[u64], ls: &LightSamples) -> FrameBox {
+    let mut b = EMPTY_BOX;
     for (w, &bits) in live.iter().enumerate() {
-        let mut bits = bits;
-        while bits != 0 {
-            let i = w * 64 + bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let (x, y) = (ls.xs[i], ls.ys[i]);
-            b = [b[0].min(x), b[1].max(x), b[2].min(y), b[3].max(y)];
+        for g in 0..64 / GROUP {
+            let mut bits = (bits >> (g * GROUP)) & GROUP_BITS;
+            if bits == GROUP_BITS {
+                b = union(b, ls.group_box[w * (64 / GROUP) + g]);
+                continue;
+            }
+            while bits != 0 {
+                let i = w * 64 + g * GROUP + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                b = grow(b, ls.xs[i], ls.ys[i]);
+            }
         }
     }
     b
 }
 
+/// All the bits of one group.
+const GROUP_BITS: u64 = (1 << GROUP) - 1;
+
 /// For every light sample, whether it is certainly inside all `planes` (`inside`) and
-/// certainly outside one (`outside`), one bit a sample, 64 samples a pass over fixed-size
-/// arrays (so the loops vectorize). Words where `live` is empty are left alone; planes
-/// with a non-finite coefficient certify nothing.
+/// certainly outside one (`outside`), one bit a sample. A word, then a group, whose box
+/// lies inside every plane, or outside one, by its margin plus the rounding of the box's
+/// bound is decided whole (each of its samples would be decided so one by one); the rest
+/// are evaluated sample by sample over fixed-size arrays (so the loops vectorize). Words
+/// where `live` is empty are left alone; planes with a non-finite coefficient certify
+/// nothing.
 pub(super) fn masks(
     planes: &[Plane],
     ls: &LightSamples,
@@ -246,37 +253,92 @@ pub(super) fn masks(
     if !planes.iter().flatten().all(|c| c.is_finite()) {
         return;
     }
-    for (wi, (xc, yc)) in ls
-        .xs
-        .chunks_exact(64)
-        .zip(ls.ys.chunks_exact(64))
-        .enumerate()
-    {
-        if live[wi] == 0 {
+    // Each plane with its margin widened by a bound on the rounding of a box's bound
+    // (a few ulps of the magnitudes it is summed from, over the whole shape).
+    let mut wide = [[0.0f32; 4]; 4];
+    for (w, p) in wide.iter_mut().zip(planes) {
+        let mag = p[2].abs() + (p[0].abs() + p[1].abs()) * ls.ext;
+        *w = [p[0], p[1], p[2], p[3] + 8.0 * f32::EPSILON * mag];
+    }
+    let wide = &wide[..planes.len()];
+    for (wi, &lw) in live.iter().enumerate() {
+        if lw == 0 {
             continue;
         }
-        let (Ok(xc), Ok(yc)): (Result<&[f32; 64], _>, Result<&[f32; 64], _>) =
-            (xc.try_into(), yc.try_into())
-        else {
-            continue;
+        let (i, o) = match box_verdict(wide, ls.word_box[wi]) {
+            Some(true) => (!0, 0),
+            Some(false) => (0, !0),
+            None => word_masks(planes, wide, ls, wi, lw),
         };
-        // Least value of (E − margin) and of (E + margin) over the planes.
-        let mut lo = [f32::INFINITY; 64];
-        let mut hi = [f32::INFINITY; 64];
-        for p in planes {
-            for j in 0..64 {
-                let e = p[0] * xc[j] + p[1] * yc[j] + p[2];
-                let (a, b) = (e - p[3], e + p[3]);
-                lo[j] = if a < lo[j] { a } else { lo[j] };
-                hi[j] = if b < hi[j] { b } else { hi[j] };
-            }
-        }
-        let (mut i, mut o) = (0u64, 0u64);
-        for j in 0..64 {
-            i |= u64::from(lo[j] > 0.0) << j;
-            o |= u64::from(hi[j] < 0.0) << j;
-        }
         inside[wi] = i;
         outside[wi] = o;
     }
+}
+
+/// The inside and outside bits of word `wi` (live bits `lw`), group by group.
+fn word_masks(
+    planes: &[Plane],
+    wide: &[Plane],
+    ls: &LightSamples,
+    wi: usize,
+    lw: u64,
+) -> (u64, u64) {
+    let (mut i, mut o) = (0u64, 0u64);
+    for g in 0..64 / GROUP {
+        if (lw >> (g * GROUP)) & GROUP_BITS == 0 {
+            continue;
+        }
+        let first = wi * 64 + g * GROUP;
+        let (gi, go) = match box_verdict(wide, ls.group_box[first / GROUP]) {
+            Some(true) => (GROUP_BITS, 0),
+            Some(false) => (0, GROUP_BITS),
+            None => group_masks(planes, ls, first),
+        };
+        i |= gi << (g * GROUP);
+        o |= go << (g * GROUP);
+    }
+    (i, o)
+}
+
+/// `Some(true)` when every point of box `b` is inside every (widened) plane beyond its
+/// margin, `Some(false)` when every point is outside one so, else `None`.
+fn box_verdict(wide: &[Plane], b: FrameBox) -> Option<bool> {
+    let mut all_inside = true;
+    for p in wide {
+        let (lo, hi) = range(p, b);
+        if hi + p[3] < 0.0 {
+            return Some(false);
+        }
+        if !(lo - p[3] > 0.0) {
+            all_inside = false;
+        }
+    }
+    all_inside.then_some(true)
+}
+
+/// The inside and outside bits of the group starting at sample `first`, sample by sample.
+fn group_masks(planes: &[Plane], ls: &LightSamples, first: usize) -> (u64, u64) {
+    let (Ok(xc), Ok(yc)): (Result<&[f32; GROUP], _>, Result<&[f32; GROUP], _>) = (
+        ls.xs[first..first + GROUP].try_into(),
+        ls.ys[first..first + GROUP].try_into(),
+    ) else {
+        return (0, 0);
+    };
+    // Least value of (E − margin) and of (E + margin) over the planes.
+    let mut lo = [f32::INFINITY; GROUP];
+    let mut hi = [f32::INFINITY; GROUP];
+    for p in planes {
+        for j in 0..GROUP {
+            let e = p[0] * xc[j] + p[1] * yc[j] + p[2];
+            let (a, b) = (e - p[3], e + p[3]);
+            lo[j] = if a < lo[j] { a } else { lo[j] };
+            hi[j] = if b < hi[j] { b } else { hi[j] };
+        }
+    }
+    let (mut i, mut o) = (0u64, 0u64);
+    for j in 0..GROUP {
+        i |= u64::from(lo[j] > 0.0) << j;
+        o |= u64::from(hi[j] < 0.0) << j;
+    }
+    (i, o)
 }

@@ -248,8 +248,9 @@ impl<'a> Unit<'a> {
             self.counters.pairs += 1;
             let hidden = self.pair(j, c, &live[..words]);
             if hidden {
-                self.boxes[j] = live_box(&self.live(j)[..words], self.ctx.ls);
-                if self.live(j).iter().all(|&w| w == 0) {
+                let now = self.live(j);
+                self.boxes[j] = live_box(&now[..words], self.ctx.ls);
+                if now.iter().all(|&w| w == 0) {
                     self.alive[local] -= 1;
                 }
             }
@@ -348,7 +349,8 @@ impl<'a> Unit<'a> {
                 continue;
             }
             let mut rgb = Vec3::ZERO;
-            for i in 0..n {
+            for &i in &ls.stored {
+                let i = i as usize;
                 let (w, b) = (i / 64, i % 64);
                 if live[w] >> b & 1 == 0 {
                     continue; // adds zero

@@ -11,15 +11,40 @@
 //! not), a distant light's axis and the tangent-scaled basis about it. The frame
 //! reproduces each sample's position up to a few roundings, which the classification's
 //! margins cover; the decision in the uncertain band is the reference's own ray.
+//!
+//! The samples are stored in Morton order of their frame coordinates, so every group of
+//! [`GROUP`] consecutive samples covers a small patch of the light whose bounding box is
+//! kept: a caster edge that misses a patch decides its whole group at once. The reference's
+//! index of each stored sample is kept for the sums that must run in its order.
 
 use crate::area_light::{concentric_disk, light_samples, orthonormal_basis, AreaLight};
 use crate::math::{Vec2, Vec3};
 
+/// Light samples per group: a quarter of a bitmask word.
+pub(super) const GROUP: usize = 16;
+
+/// A box `[x_lo, x_hi, y_lo, y_hi]` of frame coordinates.
+pub(super) type FrameBox = [f32; 4];
+
+/// The empty box.
+pub(super) const EMPTY_BOX: FrameBox = [
+    f32::INFINITY,
+    f32::NEG_INFINITY,
+    f32::INFINITY,
+    f32::NEG_INFINITY,
+];
+
 /// The light samples and their frame coordinates.
 #[derive(Clone, Debug)]
 pub(super) struct LightSamples {
-    /// The reference's sample positions in `[0, 1)²`.
+    /// The reference's sample positions in `[0, 1)²`, in storage (Morton) order.
     pub(super) uvs: Vec<Vec2>,
+    /// Storage index of the reference's sample `k`.
+    pub(super) stored: Vec<u32>,
+    /// Box of each group's frame coordinates (empty for padding).
+    pub(super) group_box: Vec<FrameBox>,
+    /// Box of each word's frame coordinates: the union of its groups'.
+    pub(super) word_box: Vec<FrameBox>,
     /// Frame coordinates of each sample, padded with zeros to whole words.
     pub(super) xs: Vec<f32>,
     pub(super) ys: Vec<f32>,
@@ -43,7 +68,7 @@ impl LightSamples {
     /// The first `n` samples of the reference's set under `area`.
     pub(super) fn new(area: &AreaLight, n: u32) -> LightSamples {
         let uvs = light_samples(n);
-        let (xs, ys, ext) = match area {
+        let (xs, ys, ext): (Vec<f32>, Vec<f32>, f32) = match area {
             AreaLight::Rect { .. } => (
                 uvs.iter().map(|p| p.x - 0.5).collect(),
                 uvs.iter().map(|p| p.y - 0.5).collect(),
@@ -58,9 +83,32 @@ impl LightSamples {
                 )
             }
         };
+        // Morton order of the coordinates quantized over the shape's extent (ties by index).
+        let key = |i: usize| {
+            let q = |c: f32| (((c / ext + 1.0) * 512.0) as u32).min(1023);
+            (morton(q(xs[i]), q(ys[i])), i)
+        };
+        let mut order: Vec<usize> = (0..uvs.len()).collect();
+        order.sort_unstable_by_key(|&i| key(i));
+        let mut stored = vec![0u32; uvs.len()];
+        for (s, &k) in order.iter().enumerate() {
+            stored[k] = s as u32;
+        }
+        let uvs: Vec<Vec2> = order.iter().map(|&k| uvs[k]).collect();
+        let mut xs: Vec<f32> = order.iter().map(|&k| xs[k]).collect();
+        let mut ys: Vec<f32> = order.iter().map(|&k| ys[k]).collect();
+        let group_box = (0..uvs.len().div_ceil(64) * (64 / GROUP))
+            .map(|g| {
+                let end = ((g + 1) * GROUP).min(uvs.len());
+                (g * GROUP..end).fold(EMPTY_BOX, |b, i| grow(b, xs[i], ys[i]))
+            })
+            .collect::<Vec<FrameBox>>();
+        let word_box = group_box
+            .chunks(64 / GROUP)
+            .map(|g| g.iter().fold(EMPTY_BOX, |b, &c| union(b, c)))
+            .collect();
         // Padded to whole words (the padding is never a live sample).
         let words = uvs.len().div_ceil(64);
-        let (mut xs, mut ys): (Vec<f32>, Vec<f32>) = (xs, ys);
         xs.resize(words * 64, 0.0);
         ys.resize(words * 64, 0.0);
         let w = if matches!(area, AreaLight::Distant { .. }) {
@@ -71,6 +119,9 @@ impl LightSamples {
         LightSamples {
             words,
             uvs,
+            stored,
+            group_box,
+            word_box,
             xs,
             ys,
             ext,
@@ -82,6 +133,33 @@ impl LightSamples {
     pub(super) fn len(&self) -> usize {
         self.uvs.len()
     }
+}
+
+/// `b` grown to hold `(x, y)`.
+pub(super) fn grow(b: FrameBox, x: f32, y: f32) -> FrameBox {
+    [b[0].min(x), b[1].max(x), b[2].min(y), b[3].max(y)]
+}
+
+/// The union of two boxes.
+pub(super) fn union(a: FrameBox, b: FrameBox) -> FrameBox {
+    [
+        a[0].min(b[0]),
+        a[1].max(b[1]),
+        a[2].min(b[2]),
+        a[3].max(b[3]),
+    ]
+}
+
+/// Interleaves the bits of two 10-bit coordinates.
+fn morton(x: u32, y: u32) -> u32 {
+    let spread = |v: u32| {
+        let mut v = v & 0x3ff;
+        v = (v | (v << 8)) & 0x00ff_00ff;
+        v = (v | (v << 4)) & 0x0f0f_0f0f;
+        v = (v | (v << 2)) & 0x3333_3333;
+        (v | (v << 1)) & 0x5555_5555
+    };
+    spread(x) | (spread(y) << 1)
 }
 
 /// The frame of `area` as seen from `p` (only a sphere's depends on `p`).
