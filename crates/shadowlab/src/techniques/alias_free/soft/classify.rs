@@ -24,7 +24,7 @@
 //! test unless it lies outside the triangle by more than any ray from it to the light
 //! could travel within the margins before leaving the plane.
 
-use super::samples::{grow, union, Frame3, FrameBox, LightSamples, EMPTY_BOX, GROUP};
+use super::samples::{grow, union, Frame3, FrameBox, LightSamples, EMPTY_BOX, GROUP, GROUP_BITS};
 use super::SOFT_TOLERANCE;
 use crate::math::Vec3;
 
@@ -233,16 +233,16 @@ pub(super) fn live_box(live: &[u64], ls: &LightSamples) -> FrameBox {
     b
 }
 
-/// All the bits of one group.
-const GROUP_BITS: u64 = (1 << GROUP) - 1;
+/// Groups in a word.
+const WORD_GROUPS: usize = 64 / GROUP;
 
 /// For every light sample, whether it is certainly inside all `planes` (`inside`) and
-/// certainly outside one (`outside`), one bit a sample. A word, then a group, whose box
-/// lies inside every plane, or outside one, by its margin plus the rounding of the box's
-/// bound is decided whole (each of its samples would be decided so one by one); the rest
-/// are evaluated sample by sample over fixed-size arrays (so the loops vectorize). Words
-/// where `live` is empty are left alone; planes with a non-finite coefficient certify
-/// nothing.
+/// certainly outside one (`outside`), one bit a sample. In each live word, one pass over
+/// its groups' boxes first decides each group whose box lies inside every plane, or
+/// outside one, by its margin plus the rounding of the box's bound (each of its samples
+/// would be decided so one by one); the other live groups are evaluated sample by sample.
+/// Both passes run over fixed-size arrays (so the loops vectorize). Words where `live` is empty are left alone;
+/// planes with a non-finite coefficient certify nothing.
 pub(super) fn masks(
     planes: &[Plane],
     ls: &LightSamples,
@@ -253,67 +253,69 @@ pub(super) fn masks(
     if !planes.iter().flatten().all(|c| c.is_finite()) {
         return;
     }
-    // Each plane with its margin widened by a bound on the rounding of a box's bound
-    // (a few ulps of the magnitudes it is summed from, over the whole shape).
-    let mut wide = [[0.0f32; 4]; 4];
-    for (w, p) in wide.iter_mut().zip(planes) {
-        let mag = p[2].abs() + (p[0].abs() + p[1].abs()) * ls.ext;
-        *w = [p[0], p[1], p[2], p[3] + 8.0 * f32::EPSILON * mag];
+    let [x_lo, x_hi, y_lo, y_hi] = &ls.group_bounds;
+    // Each plane with the bounds that give its least and greatest value over a box, and
+    // its margin widened by a few ulps of the magnitudes a bound is summed from (over the
+    // whole shape), which covers the bound's own rounding.
+    let mut prepared = [(Plane::default(), 0.0f32, [&x_lo[..], x_hi, y_lo, y_hi]); 4];
+    for (q, p) in prepared.iter_mut().zip(planes) {
+        let m = p[3] + 8.0 * f32::EPSILON * (p[2].abs() + (p[0].abs() + p[1].abs()) * ls.ext);
+        let (xa, xb) = if p[0] >= 0.0 {
+            (x_lo, x_hi)
+        } else {
+            (x_hi, x_lo)
+        };
+        let (ya, yb) = if p[1] >= 0.0 {
+            (y_lo, y_hi)
+        } else {
+            (y_hi, y_lo)
+        };
+        *q = (*p, m, [xa, xb, ya, yb]);
     }
-    let wide = &wide[..planes.len()];
+    let prepared = &prepared[..planes.len()];
     for (wi, &lw) in live.iter().enumerate() {
         if lw == 0 {
             continue;
         }
-        let (i, o) = match box_verdict(wide, ls.word_box[wi]) {
-            Some(true) => (!0, 0),
-            Some(false) => (0, !0),
-            None => word_masks(planes, wide, ls, wi, lw),
-        };
+        // Over the word's groups, the least of (lower bound − margin) and of (upper
+        // bound + margin) over the planes.
+        let mut lo = [f32::INFINITY; WORD_GROUPS];
+        let mut hi = [f32::INFINITY; WORD_GROUPS];
+        let at = wi * WORD_GROUPS..(wi + 1) * WORD_GROUPS;
+        for (p, m, [xa, xb, ya, yb]) in prepared {
+            let (Ok(xa), Ok(xb), Ok(ya), Ok(yb)) = (
+                <&[f32; WORD_GROUPS]>::try_from(&xa[at.clone()]),
+                <&[f32; WORD_GROUPS]>::try_from(&xb[at.clone()]),
+                <&[f32; WORD_GROUPS]>::try_from(&ya[at.clone()]),
+                <&[f32; WORD_GROUPS]>::try_from(&yb[at.clone()]),
+            ) else {
+                return;
+            };
+            for g in 0..WORD_GROUPS {
+                let a = p[0] * xa[g] + p[1] * ya[g] + p[2] - m;
+                let b = p[0] * xb[g] + p[1] * yb[g] + p[2] + m;
+                lo[g] = if a < lo[g] { a } else { lo[g] };
+                hi[g] = if b < hi[g] { b } else { hi[g] };
+            }
+        }
+        let (mut i, mut o) = (0u64, 0u64);
+        for k in 0..WORD_GROUPS {
+            if (lw >> (k * GROUP)) & GROUP_BITS == 0 {
+                continue;
+            }
+            let (gi, go) = if lo[k] > 0.0 {
+                (GROUP_BITS, 0)
+            } else if hi[k] < 0.0 {
+                (0, GROUP_BITS)
+            } else {
+                group_masks(planes, ls, (wi * WORD_GROUPS + k) * GROUP)
+            };
+            i |= gi << (k * GROUP);
+            o |= go << (k * GROUP);
+        }
         inside[wi] = i;
         outside[wi] = o;
     }
-}
-
-/// The inside and outside bits of word `wi` (live bits `lw`), group by group.
-fn word_masks(
-    planes: &[Plane],
-    wide: &[Plane],
-    ls: &LightSamples,
-    wi: usize,
-    lw: u64,
-) -> (u64, u64) {
-    let (mut i, mut o) = (0u64, 0u64);
-    for g in 0..64 / GROUP {
-        if (lw >> (g * GROUP)) & GROUP_BITS == 0 {
-            continue;
-        }
-        let first = wi * 64 + g * GROUP;
-        let (gi, go) = match box_verdict(wide, ls.group_box[first / GROUP]) {
-            Some(true) => (GROUP_BITS, 0),
-            Some(false) => (0, GROUP_BITS),
-            None => group_masks(planes, ls, first),
-        };
-        i |= gi << (g * GROUP);
-        o |= go << (g * GROUP);
-    }
-    (i, o)
-}
-
-/// `Some(true)` when every point of box `b` is inside every (widened) plane beyond its
-/// margin, `Some(false)` when every point is outside one so, else `None`.
-fn box_verdict(wide: &[Plane], b: FrameBox) -> Option<bool> {
-    let mut all_inside = true;
-    for p in wide {
-        let (lo, hi) = range(p, b);
-        if hi + p[3] < 0.0 {
-            return Some(false);
-        }
-        if !(lo - p[3] > 0.0) {
-            all_inside = false;
-        }
-    }
-    all_inside.then_some(true)
 }
 
 /// The inside and outside bits of the group starting at sample `first`, sample by sample.

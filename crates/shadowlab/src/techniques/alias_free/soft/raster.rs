@@ -21,7 +21,7 @@
 use super::super::bsp::{Bsp, Node};
 use super::classify::{classify, live_box, masks, Caster, Receiver, Verdict};
 use super::footprint::{footprint, Footprint};
-use super::samples::{bounding_corners, frame_at, LightSamples};
+use super::samples::{bounding_corners, frame_at, LightSamples, GROUP, GROUP_BITS};
 use super::transform::LitMasks;
 use crate::area_light::AreaLight;
 use crate::frame::{Frame, Visibility};
@@ -178,13 +178,16 @@ impl<'a> Unit<'a> {
     /// The light samples of sample `j` that no opaque caster hides yet.
     fn live(&self, j: usize) -> [u64; MAX_WORDS] {
         let words = self.ctx.ls.words;
-        std::array::from_fn(|w| {
-            if w < words {
-                self.lit[j * words + w] & !self.dark[j * words + w]
-            } else {
-                0
-            }
-        })
+        let span = j * words..(j + 1) * words;
+        let mut out = [0u64; MAX_WORDS];
+        for ((o, &l), &d) in out
+            .iter_mut()
+            .zip(&self.lit[span.clone()])
+            .zip(&self.dark[span])
+        {
+            *o = l & !d;
+        }
+        out
     }
 
     /// Traverses footprint `f` through the unit.
@@ -249,7 +252,11 @@ impl<'a> Unit<'a> {
             let hidden = self.pair(j, c, &live[..words]);
             if hidden {
                 let now = self.live(j);
-                self.boxes[j] = live_box(&now[..words], self.ctx.ls);
+                // The box only bounds the live samples: it is re-fitted when a group of
+                // them has gone dark, the shrink that decides pairs whole.
+                if live.iter().zip(&now).any(|(&a, &b)| group_died(a, b)) {
+                    self.boxes[j] = live_box(&now[..words], self.ctx.ls);
+                }
                 if now.iter().all(|&w| w == 0) {
                     self.alive[local] -= 1;
                 }
@@ -371,6 +378,14 @@ impl<'a> Unit<'a> {
         }
         (values, self.counters)
     }
+}
+
+/// True when a group of light samples live in word `before` has none live in `after`.
+fn group_died(before: u64, after: u64) -> bool {
+    (0..64 / GROUP).any(|g| {
+        let m = GROUP_BITS << (g * GROUP);
+        before & m != 0 && after & m == 0
+    })
 }
 
 /// Most bitmask words a view sample holds (see [`super::MAX_EXACT_LIGHT_SAMPLES`]).

@@ -23,6 +23,9 @@ use crate::math::{Vec2, Vec3};
 /// Light samples per group: a quarter of a bitmask word.
 pub(super) const GROUP: usize = 16;
 
+/// All the bits of one group.
+pub(super) const GROUP_BITS: u64 = (1 << GROUP) - 1;
+
 /// A box `[x_lo, x_hi, y_lo, y_hi]` of frame coordinates.
 pub(super) type FrameBox = [f32; 4];
 
@@ -43,8 +46,9 @@ pub(super) struct LightSamples {
     pub(super) stored: Vec<u32>,
     /// Box of each group's frame coordinates (empty for padding).
     pub(super) group_box: Vec<FrameBox>,
-    /// Box of each word's frame coordinates: the union of its groups'.
-    pub(super) word_box: Vec<FrameBox>,
+    /// The same boxes by bound (`x_lo`, `x_hi`, `y_lo`, `y_hi` of every group, padding's
+    /// zero), for passes over all groups at once.
+    pub(super) group_bounds: [Vec<f32>; 4],
     /// Frame coordinates of each sample, padded with zeros to whole words.
     pub(super) xs: Vec<f32>,
     pub(super) ys: Vec<f32>,
@@ -103,10 +107,12 @@ impl LightSamples {
                 (g * GROUP..end).fold(EMPTY_BOX, |b, i| grow(b, xs[i], ys[i]))
             })
             .collect::<Vec<FrameBox>>();
-        let word_box = group_box
-            .chunks(64 / GROUP)
-            .map(|g| g.iter().fold(EMPTY_BOX, |b, &c| union(b, c)))
-            .collect();
+        let group_bounds = std::array::from_fn(|k| {
+            group_box
+                .iter()
+                .map(|b| if b[0] <= b[1] { b[k] } else { 0.0 })
+                .collect()
+        });
         // Padded to whole words (the padding is never a live sample).
         let words = uvs.len().div_ceil(64);
         xs.resize(words * 64, 0.0);
@@ -121,7 +127,7 @@ impl LightSamples {
             uvs,
             stored,
             group_box,
-            word_box,
+            group_bounds,
             xs,
             ys,
             ext,
