@@ -328,13 +328,29 @@ pub struct RayGenerator {
 }
 
 impl RayGenerator {
-    /// The offset of image position `(x, y)` from the image centre: at unit depth
-    /// (perspective) or on the eye's plane (orthographic).
+    /// The image position `(x, y)` in normalized device coordinates.
+    #[inline]
+    fn ndc(&self, x: f32, y: f32) -> (f32, f32) {
+        (
+            x * self.inv_width * 2.0 - 1.0,
+            1.0 - y * self.inv_height * 2.0,
+        )
+    }
+
+    /// The offset of image position `(x, y)` from the image centre on the eye's plane
+    /// (orthographic).
     #[inline]
     fn offset(&self, x: f32, y: f32) -> Vec3 {
-        let ndc_x = x * self.inv_width * 2.0 - 1.0;
-        let ndc_y = 1.0 - y * self.inv_height * 2.0;
-        self.right * ndc_x + self.up * ndc_y
+        let (nx, ny) = self.ndc(x, y);
+        self.right * nx + self.up * ny
+    }
+
+    /// The perspective direction through image position `(x, y)`, summed from the forward
+    /// axis outwards (the order every perspective image has always been computed in).
+    #[inline]
+    fn perspective_direction(&self, x: f32, y: f32) -> Vec3 {
+        let (nx, ny) = self.ndc(x, y);
+        self.forward + self.right * nx + self.up * ny
     }
 
     /// See [`Camera::ray_direction`].
@@ -343,7 +359,7 @@ impl RayGenerator {
         if self.parallel {
             self.forward
         } else {
-            self.forward + self.offset(x, y)
+            self.perspective_direction(x, y)
         }
     }
 
@@ -357,7 +373,7 @@ impl RayGenerator {
         if self.parallel {
             (self.eye + self.offset(x, y), self.forward)
         } else {
-            (self.eye, self.forward + self.offset(x, y))
+            (self.eye, self.perspective_direction(x, y))
         }
     }
 
