@@ -41,17 +41,23 @@ const MAX_WIDE_DEPTH: usize = TRAVERSAL_STACK - 1;
 /// merges only a few per pass, so its time grows with the square of their number.
 const MAX_REPEATS: usize = 64;
 
-/// Builds the wide BVH over `tris`.
-pub fn build(tris: &[Triangle]) -> CwBvh {
+/// Builds the wide BVH over `tris`, each triangle's box grown by `pad` on every side.
+///
+/// The padding keeps the tree from culling a triangle that the watertight triangle test
+/// would report hit: that test may place a grazing hit a few ulps outside the triangle's
+/// exact box (a shadow ray leaving a surface just above a nearly coplanar neighbour), and a
+/// tight box would then answer differently from testing every triangle.
+pub fn build(tris: &[Triangle], pad: f32) -> CwBvh {
+    let boxes: Vec<Aabb> = tris.iter().map(|t| padded(t.aabb(), pad)).collect();
     let params = BvhBuildParams::fast_build();
     let max_leaf = params.max_prims_per_leaf.clamp(1, 3);
-    if most_repeated_box(tris) > MAX_REPEATS {
-        return bvh2_to_cwbvh(&median_split(tris), max_leaf, true, false);
+    if most_repeated_box(&boxes) > MAX_REPEATS {
+        return bvh2_to_cwbvh(&median_split(&boxes), max_leaf, true, false);
     }
-    let mut bvh2 = PlocBuilder::with_capacity(tris.len()).build(
+    let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
         params.ploc_search_distance,
-        tris,
-        (0..tris.len() as u32).collect(),
+        &boxes,
+        (0..boxes.len() as u32).collect(),
         params.sort_precision,
         params.search_depth_threshold,
     );
@@ -64,16 +70,21 @@ pub fn build(tris: &[Triangle]) -> CwBvh {
             }
         }
     }
-    bvh2_to_cwbvh(&median_split(tris), max_leaf, true, false)
+    bvh2_to_cwbvh(&median_split(&boxes), max_leaf, true, false)
+}
+
+/// Box `b` grown by `pad` on every side.
+fn padded(b: Aabb, pad: f32) -> Aabb {
+    let p = Vec3A::splat(pad);
+    Aabb::new(b.min - p, b.max + p)
 }
 
 /// The largest number of primitives sharing one bounding box (counted by a 64-bit hash of
 /// the box's bits, so a collision can only overstate it).
-fn most_repeated_box(tris: &[Triangle]) -> usize {
-    let mut keys: Vec<u64> = tris
+fn most_repeated_box(boxes: &[Aabb]) -> usize {
+    let mut keys: Vec<u64> = boxes
         .iter()
-        .map(|t| {
-            let b = t.aabb();
+        .map(|b| {
             let bits = [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z];
             bits.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, v| {
                 (h ^ u64::from(v.to_bits())).wrapping_mul(0x0000_0100_0000_01b3)
@@ -127,14 +138,13 @@ fn wide_depth(bvh: &CwBvh) -> usize {
 
 /// A binary BVH with one primitive per leaf whose every inner node splits its primitives
 /// in half (at the median centroid along the longest axis of their centroids' bounds).
-fn median_split(tris: &[Triangle]) -> Bvh2 {
-    let boxes: Vec<Aabb> = tris.iter().map(|t| t.aabb()).collect();
+fn median_split(boxes: &[Aabb]) -> Bvh2 {
     let centroids: Vec<Vec3A> = boxes.iter().map(|b| b.center()).collect();
-    let mut order: Vec<u32> = (0..tris.len() as u32).collect();
-    let mut nodes = vec![Bvh2Node::default(); (2 * tris.len()).saturating_sub(1).max(1)];
+    let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
+    let mut nodes = vec![Bvh2Node::default(); (2 * boxes.len()).saturating_sub(1).max(1)];
     let mut next = 1usize;
     // (node index, primitive range): the range is split in place in `order`.
-    let mut stack = vec![(0usize, 0usize, tris.len())];
+    let mut stack = vec![(0usize, 0usize, boxes.len())];
     while let Some((node, lo, hi)) = stack.pop() {
         let prims = &mut order[lo..hi];
         let mut bounds = Aabb::empty();
@@ -210,7 +220,7 @@ mod tests {
     fn a_triangle_repeated_many_times_gives_a_shallow_tree_holding_every_copy() {
         let n = 20_000u32;
         let tris = vec![tri(0.0); n as usize];
-        let bvh = build(&tris);
+        let bvh = build(&tris, 0.0);
         assert!(wide_depth(&bvh) <= MAX_WIDE_DEPTH, "{}", wide_depth(&bvh));
         assert_eq!(primitives_reached(&bvh), (0..n).collect::<Vec<_>>());
     }
@@ -219,7 +229,8 @@ mod tests {
     fn the_median_split_holds_every_primitive_at_logarithmic_depth() {
         let n = 1000u32;
         let tris: Vec<Triangle> = (0..n).map(|i| tri((i % 7) as f32)).collect();
-        let bvh2 = median_split(&tris);
+        let boxes: Vec<Aabb> = tris.iter().map(|t| t.aabb()).collect();
+        let bvh2 = median_split(&boxes);
         assert!(binary_depth(&bvh2) <= 11, "{}", binary_depth(&bvh2));
         let wide = bvh2_to_cwbvh(&bvh2, 3, true, false);
         assert_eq!(primitives_reached(&wide), (0..n).collect::<Vec<_>>());
