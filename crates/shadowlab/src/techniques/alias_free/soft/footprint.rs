@@ -16,6 +16,13 @@
 //!
 //! Every bound is widened by [`SOFT_TOLERANCE`] of the distances involved: a larger
 //! widening only sends more pairs to the exact classification.
+//!
+//! The cone reaches every depth behind the triangle, but a BSP node's samples lie no deeper
+//! than its `zmax`, and a shallow receiver sees only a narrow penumbra. With `c` the origin,
+//! `p = (1 + s)·t − s·l` has the image of `t − σ·l`, `σ = s / (1 + s)`; when every vertex
+//! lies deeper than every light corner, `p_z ≤ Z` bounds `s` by
+//! `S = (Z − t_z,min) / (t_z,min − l_z,max)`, so the image lies in the hull of the vertices'
+//! images and those of `vₖ − σ_max·cⱼ`, `σ_max = S / (1 + S) < 1` ([`DepthBound`]).
 
 use super::super::bsp::{Bsp, Node};
 use super::super::transform::{Ortho, Persp, Projection};
@@ -52,6 +59,90 @@ impl Footprint {
             & (v >= self.lo[1])
             & (v <= self.hi[1])
             & (z >= self.zmin)
+    }
+}
+
+/// A perspective plane's light corners, for footprints bounded by a node's depth.
+pub(super) struct DepthBound {
+    /// The corners in the face's coordinates (relative to the light's centre).
+    corners: Vec<Vec3>,
+    /// Their greatest depth.
+    lz_max: f32,
+    /// The plane's distance scale.
+    scale: f32,
+}
+
+impl DepthBound {
+    /// The bound of a perspective plane; `None` for an orthographic one.
+    pub(super) fn of(bsp: &Bsp, corners: &[Vec3]) -> Option<DepthBound> {
+        let Projection::Persp(pp) = &bsp.proj else {
+            return None;
+        };
+        let corners: Vec<Vec3> = corners.iter().map(|&c| pp.coords(c)).collect();
+        let lz_max = corners
+            .iter()
+            .map(|c| c.z)
+            .fold(f32::NEG_INFINITY, f32::max);
+        Some(DepthBound {
+            corners,
+            lz_max,
+            scale: bsp.scale,
+        })
+    }
+
+    /// The vertices of triangle `v` in the face's coordinates.
+    pub(super) fn vertices(bsp: &Bsp, v: [Vec3; 3]) -> Option<[Vec3; 3]> {
+        match &bsp.proj {
+            Projection::Persp(pp) => Some(v.map(|p| pp.coords(p))),
+            Projection::Ortho(_) => None,
+        }
+    }
+
+    /// The rectangle `[lo, hi]` holding the image of every view sample no deeper than `z`
+    /// that a light sample's ray through the triangle with face coordinates `v` can start
+    /// from; `None` when no tighter bound than the cone's holds (a vertex not deeper than
+    /// every light corner, or a generator too close to the light's plane).
+    pub(super) fn rect(&self, v: &[Vec3; 3], z: f32) -> Option<([f32; 2], [f32; 2])> {
+        let tol = SOFT_TOLERANCE;
+        let slack = tol * self.scale;
+        let tz_min = v[0].z.min(v[1].z).min(v[2].z) - slack;
+        let lz_max = self.lz_max + slack;
+        // Every vertex deeper than every corner (false for a NaN).
+        let deeper = tz_min > lz_max;
+        if !deeper || !z.is_finite() {
+            return None;
+        }
+        let reach = (z + slack - tz_min).max(0.0);
+        let s_max = reach / (tz_min - lz_max) * (1.0 + tol);
+        let sigma = (s_max / (1.0 + s_max) * (1.0 + tol)).min(1.0);
+        if !sigma.is_finite() {
+            return None;
+        }
+        let mut lo = [f32::INFINITY; 2];
+        let mut hi = [f32::NEG_INFINITY; 2];
+        let mut add = |g: Vec3| -> bool {
+            // In front of the light's plane by the margin (false for a NaN).
+            let in_front = g.z > tol * (g.length() + self.scale);
+            if !in_front {
+                return false;
+            }
+            let (u, w) = (g.x / g.z, g.y / g.z);
+            let d = 4.0 * tol * (1.0 + u.abs() + w.abs()) * (1.0 + (g.length() + self.scale) / g.z);
+            lo = [lo[0].min(u - d), lo[1].min(w - d)];
+            hi = [hi[0].max(u + d), hi[1].max(w + d)];
+            true
+        };
+        for p in v {
+            if !add(*p) {
+                return None;
+            }
+            for &c in &self.corners {
+                if !add(*p - c * sigma) {
+                    return None;
+                }
+            }
+        }
+        Some((lo, hi))
     }
 }
 

@@ -20,7 +20,7 @@
 
 use super::super::bsp::{Bsp, Node};
 use super::classify::{classify, live_box, masks, Caster, Receiver, Verdict};
-use super::footprint::{footprint, Footprint};
+use super::footprint::{footprint, DepthBound, Footprint};
 use super::samples::{bounding_corners, frame_at, LightSamples, GROUP, GROUP_BITS};
 use super::transform::LitMasks;
 use crate::area_light::AreaLight;
@@ -190,10 +190,12 @@ impl<'a> Unit<'a> {
         out
     }
 
-    /// Traverses footprint `f` through the unit.
-    fn rasterize(&mut self, f: &Footprint, scene: &Scene) {
+    /// Traverses footprint `f` through the unit, each node's rectangle narrowed to the
+    /// penumbra no deeper than the node's samples where `bound` gives one.
+    fn rasterize(&mut self, f: &Footprint, scene: &Scene, bound: Option<&DepthBound>) {
         let bsp = self.bsp;
         let mut cast = None;
+        let mut verts = None;
         walk(&bsp.nodes, self.root, |ni| {
             self.counters.nodes_visited += 1;
             let local = (ni - self.root) as usize;
@@ -205,11 +207,28 @@ impl<'a> Unit<'a> {
             if !f.overlaps(n) {
                 return false;
             }
+            let narrowed = bound.and_then(|b| {
+                let v = verts.get_or_insert_with(|| {
+                    DepthBound::vertices(bsp, scene.triangle(f.id as usize))
+                });
+                v.as_ref().and_then(|v| b.rect(v, n.zmax))
+            });
+            let g = match narrowed {
+                Some((lo, hi)) => Footprint {
+                    lo: [f.lo[0].max(lo[0]), f.lo[1].max(lo[1])],
+                    hi: [f.hi[0].min(hi[0]), f.hi[1].min(hi[1])],
+                    ..*f
+                },
+                None => *f,
+            };
+            if !g.overlaps(n) {
+                return false;
+            }
             if !n.is_leaf() {
                 return true;
             }
             let c = cast.get_or_insert_with(|| caster(scene, f.id));
-            self.leaf(n, local, f, c);
+            self.leaf(n, local, &g, c);
             if self.alive[local] == 0 {
                 self.mark_done(ni);
             }
@@ -418,6 +437,7 @@ pub(super) fn rasterize(ctx: &Ctx, trees: &[Bsp], out: &mut Visibility) -> Count
             .with_min_len(1024)
             .filter_map(|id| footprint(bsp, &corners, tan_radius, scene.triangle(id as usize), id))
             .collect();
+        let bound = DepthBound::of(bsp, &corners);
         let units: Vec<(usize, Vec<Vec3>, Counters)> = bsp
             .unit_roots
             .par_iter()
@@ -425,7 +445,7 @@ pub(super) fn rasterize(ctx: &Ctx, trees: &[Bsp], out: &mut Visibility) -> Count
                 let mut unit = Unit::new(ctx, bsp, root);
                 let rn = &bsp.nodes[root as usize];
                 for f in prints.iter().filter(|f| f.overlaps(rn)) {
-                    unit.rasterize(f, scene);
+                    unit.rasterize(f, scene, bound.as_ref());
                 }
                 let first = unit.first;
                 let (values, counters) = unit.finish(scene);
