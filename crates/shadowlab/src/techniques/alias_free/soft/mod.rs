@@ -17,9 +17,11 @@
 //! - *bsp*: the hard technique's BSP over each plane (`leaf-size` samples a leaf).
 //! - *raster* (`raster.rs`, `footprint.rs`, `classify.rs`): each caster triangle's
 //!   conservative penumbra footprint (the cone its vertices span with the light's bounding
-//!   corners) culls nodes and samples; each (view sample, triangle) pair is decided whole
-//!   by the light's bounding square where it can be, else with two bitmasks from four
-//!   affine functions of the light samples, and the light samples within a margin of an
+//!   corners, narrowed at each BSP node to the depth of its deepest sample) culls nodes and
+//!   samples; each (view sample, triangle) pair is decided whole by the light's bounding
+//!   square where it can be, else with two bitmasks from four affine functions of the
+//!   light samples (a patch of 16 samples at once where a function's sign is the same over
+//!   the patch's box), and the light samples within a margin of an
 //!   edge take the reference's own ray (watertight test, same origin, direction and
 //!   length). Opaque casters set bits of a dark mask; samples and BSP nodes whose light
 //!   samples are all dark drop out (the paper's occlusion culling).
