@@ -312,10 +312,11 @@ mod tests {
 
     #[test]
     fn a_grazing_hit_just_outside_a_triangles_box_is_not_culled() {
-        // Two nearly coplanar triangles of a real mesh (a motorbike's fairing) and the
-        // shadow ray of a view sample on the second: the ray starts 2.3e-6 above the
-        // first, and the watertight test reports a hit at t = 2.8e-5, 1.7 ulps outside the
-        // first's exact box. The tree must give the answer of testing every triangle.
+        // Two nearly coplanar triangles of a real mesh (a motorbike) and the shadow ray of
+        // a view sample on the second: the ray starts 2.3e-6 above the first's highest
+        // vertex and climbs, yet the watertight test reports a hit at t = 2.8e-5, 1.3e-5
+        // outside the first's exact box (1.7 ulps of its largest coordinate). The tree
+        // must give the answer of testing every triangle.
         let mut scene = Scene::new("tie");
         let m = scene.add_material(Material::default());
         let a = vec3(-6.650635, 50.292435, 7.78717);

@@ -220,7 +220,7 @@ pub(super) fn live_box(live: &[u64], ls: &LightSamples) -> FrameBox {
         for g in 0..64 / GROUP {
             let mut bits = (bits >> (g * GROUP)) & GROUP_BITS;
             if bits == GROUP_BITS {
-                b = union(b, ls.group_box[w * (64 / GROUP) + g]);
+                b = union(b, ls.group_box(w * (64 / GROUP) + g));
                 continue;
             }
             while bits != 0 {
@@ -241,8 +241,8 @@ const WORD_GROUPS: usize = 64 / GROUP;
 /// its groups' boxes first decides each group whose box lies inside every plane, or
 /// outside one, by its margin plus the rounding of the box's bound (each of its samples
 /// would be decided so one by one); the other live groups are evaluated sample by sample.
-/// Both passes run over fixed-size arrays (so the loops vectorize). Words where `live` is empty are left alone;
-/// planes with a non-finite coefficient certify nothing.
+/// Both passes run over fixed-size arrays (so the loops vectorize). Words where `live` is
+/// empty are left alone; planes with a non-finite coefficient certify nothing.
 pub(super) fn masks(
     planes: &[Plane],
     ls: &LightSamples,
@@ -257,7 +257,7 @@ pub(super) fn masks(
     // Each plane with the bounds that give its least and greatest value over a box, and
     // its margin widened by a few ulps of the magnitudes a bound is summed from (over the
     // whole shape), which covers the bound's own rounding.
-    let mut prepared = [(Plane::default(), 0.0f32, [&x_lo[..], x_hi, y_lo, y_hi]); 4];
+    let mut prepared = [(Plane::default(), [&x_lo[..], x_hi, y_lo, y_hi]); 4];
     for (q, p) in prepared.iter_mut().zip(planes) {
         let m = p[3] + 8.0 * f32::EPSILON * (p[2].abs() + (p[0].abs() + p[1].abs()) * ls.ext);
         let (xa, xb) = if p[0] >= 0.0 {
@@ -270,7 +270,7 @@ pub(super) fn masks(
         } else {
             (y_hi, y_lo)
         };
-        *q = (*p, m, [xa, xb, ya, yb]);
+        *q = ([p[0], p[1], p[2], m], [xa, xb, ya, yb]);
     }
     let prepared = &prepared[..planes.len()];
     for (wi, &lw) in live.iter().enumerate() {
@@ -282,7 +282,7 @@ pub(super) fn masks(
         let mut lo = [f32::INFINITY; WORD_GROUPS];
         let mut hi = [f32::INFINITY; WORD_GROUPS];
         let at = wi * WORD_GROUPS..(wi + 1) * WORD_GROUPS;
-        for (p, m, [xa, xb, ya, yb]) in prepared {
+        for (p, [xa, xb, ya, yb]) in prepared {
             let (Ok(xa), Ok(xb), Ok(ya), Ok(yb)) = (
                 <&[f32; WORD_GROUPS]>::try_from(&xa[at.clone()]),
                 <&[f32; WORD_GROUPS]>::try_from(&xb[at.clone()]),
@@ -292,8 +292,8 @@ pub(super) fn masks(
                 return;
             };
             for g in 0..WORD_GROUPS {
-                let a = p[0] * xa[g] + p[1] * ya[g] + p[2] - m;
-                let b = p[0] * xb[g] + p[1] * yb[g] + p[2] + m;
+                let a = p[0] * xa[g] + p[1] * ya[g] + p[2] - p[3];
+                let b = p[0] * xb[g] + p[1] * yb[g] + p[2] + p[3];
                 lo[g] = if a < lo[g] { a } else { lo[g] };
                 hi[g] = if b < hi[g] { b } else { hi[g] };
             }

@@ -72,6 +72,14 @@ pub(super) struct DepthBound {
     scale: f32,
 }
 
+/// One caster as [`DepthBound::rect`] bounds it: its vertices in the face's coordinates,
+/// their least depth (less the slack) and its distance beyond the deepest light corner.
+pub(super) struct CasterDepth {
+    v: [Vec3; 3],
+    tz_min: f32,
+    gap: f32,
+}
+
 impl DepthBound {
     /// The bound of a perspective plane; `None` for an orthographic one.
     pub(super) fn of(bsp: &Bsp, corners: &[Vec3]) -> Option<DepthBound> {
@@ -90,30 +98,31 @@ impl DepthBound {
         })
     }
 
-    /// The vertices of triangle `v` in the face's coordinates.
-    pub(super) fn vertices(bsp: &Bsp, v: [Vec3; 3]) -> Option<[Vec3; 3]> {
-        match &bsp.proj {
-            Projection::Persp(pp) => Some(v.map(|p| pp.coords(p))),
-            Projection::Ortho(_) => None,
-        }
+    /// Triangle `v` on `bsp`'s plane (this bound's); `None` when it is not deeper than
+    /// every light corner, where no tighter bound than the cone's holds.
+    pub(super) fn caster(&self, bsp: &Bsp, v: [Vec3; 3]) -> Option<CasterDepth> {
+        let Projection::Persp(pp) = &bsp.proj else {
+            return None;
+        };
+        let v = v.map(|p| pp.coords(p));
+        let slack = SOFT_TOLERANCE * self.scale;
+        let tz_min = v[0].z.min(v[1].z).min(v[2].z) - slack;
+        let gap = tz_min - (self.lz_max + slack);
+        // Every vertex deeper than every corner (false for a NaN).
+        let deeper = gap > 0.0;
+        deeper.then_some(CasterDepth { v, tz_min, gap })
     }
 
     /// The rectangle `[lo, hi]` holding the image of every view sample no deeper than `z`
-    /// that a light sample's ray through the triangle with face coordinates `v` can start
-    /// from; `None` when no tighter bound than the cone's holds (a vertex not deeper than
-    /// every light corner, or a generator too close to the light's plane).
-    pub(super) fn rect(&self, v: &[Vec3; 3], z: f32) -> Option<([f32; 2], [f32; 2])> {
+    /// that a light sample's ray through caster `c` can start from; `None` when a
+    /// generator lies too close to the light's plane.
+    pub(super) fn rect(&self, c: &CasterDepth, z: f32) -> Option<([f32; 2], [f32; 2])> {
         let tol = SOFT_TOLERANCE;
-        let slack = tol * self.scale;
-        let tz_min = v[0].z.min(v[1].z).min(v[2].z) - slack;
-        let lz_max = self.lz_max + slack;
-        // Every vertex deeper than every corner (false for a NaN).
-        let deeper = tz_min > lz_max;
-        if !deeper || !z.is_finite() {
+        if !z.is_finite() {
             return None;
         }
-        let reach = (z + slack - tz_min).max(0.0);
-        let s_max = reach / (tz_min - lz_max) * (1.0 + tol);
+        let reach = (z + tol * self.scale - c.tz_min).max(0.0);
+        let s_max = reach / c.gap * (1.0 + tol);
         let sigma = (s_max / (1.0 + s_max) * (1.0 + tol)).min(1.0);
         if !sigma.is_finite() {
             return None;
@@ -123,27 +132,32 @@ impl DepthBound {
         let mut add = |g: Vec3| -> bool {
             // In front of the light's plane by the margin (false for a NaN).
             let in_front = g.z > tol * (g.length() + self.scale);
-            if !in_front {
-                return false;
+            if in_front {
+                widen(&mut lo, &mut hi, g, self.scale);
             }
-            let (u, w) = (g.x / g.z, g.y / g.z);
-            let d = 4.0 * tol * (1.0 + u.abs() + w.abs()) * (1.0 + (g.length() + self.scale) / g.z);
-            lo = [lo[0].min(u - d), lo[1].min(w - d)];
-            hi = [hi[0].max(u + d), hi[1].max(w + d)];
-            true
+            in_front
         };
-        for p in v {
+        for p in &c.v {
             if !add(*p) {
                 return None;
             }
-            for &c in &self.corners {
-                if !add(*p - c * sigma) {
+            for &l in &self.corners {
+                if !add(*p - l * sigma) {
                     return None;
                 }
             }
         }
         Some((lo, hi))
     }
+}
+
+/// `[lo, hi]` grown to hold the image of generator `g` (in front of the plane), widened by
+/// the rounding of its projection and of the samples' own.
+fn widen(lo: &mut [f32; 2], hi: &mut [f32; 2], g: Vec3, scale: f32) {
+    let (u, w) = (g.x / g.z, g.y / g.z);
+    let d = 4.0 * SOFT_TOLERANCE * (1.0 + u.abs() + w.abs()) * (1.0 + (g.length() + scale) / g.z);
+    *lo = [lo[0].min(u - d), lo[1].min(w - d)];
+    *hi = [hi[0].max(u + d), hi[1].max(w + d)];
 }
 
 /// The footprint of triangle `id` (vertices `v`) on `bsp`'s plane; `corners` bound the
@@ -222,11 +236,8 @@ fn perspective(
         - tol * scale;
     let mut lo = [f32::INFINITY; 2];
     let mut hi = [f32::NEG_INFINITY; 2];
-    for g in gens {
-        let (u, w) = (g.x / g.z, g.y / g.z);
-        let d = 4.0 * tol * (1.0 + u.abs() + w.abs()) * (1.0 + (g.length() + scale) / g.z);
-        lo = [lo[0].min(u - d), lo[1].min(w - d)];
-        hi = [hi[0].max(u + d), hi[1].max(w + d)];
+    for &g in gens {
+        widen(&mut lo, &mut hi, g, scale);
     }
     Some(Footprint { lo, hi, zmin, id })
 }

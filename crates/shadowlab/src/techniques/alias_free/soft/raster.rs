@@ -195,7 +195,7 @@ impl<'a> Unit<'a> {
     fn rasterize(&mut self, f: &Footprint, scene: &Scene, bound: Option<&DepthBound>) {
         let bsp = self.bsp;
         let mut cast = None;
-        let mut verts = None;
+        let mut depth = None;
         walk(&bsp.nodes, self.root, |ni| {
             self.counters.nodes_visited += 1;
             let local = (ni - self.root) as usize;
@@ -208,10 +208,8 @@ impl<'a> Unit<'a> {
                 return false;
             }
             let narrowed = bound.and_then(|b| {
-                let v = verts.get_or_insert_with(|| {
-                    DepthBound::vertices(bsp, scene.triangle(f.id as usize))
-                });
-                v.as_ref().and_then(|v| b.rect(v, n.zmax))
+                let c = depth.get_or_insert_with(|| b.caster(bsp, scene.triangle(f.id as usize)));
+                c.as_ref().and_then(|c| b.rect(c, n.zmax))
             });
             let g = match narrowed {
                 Some((lo, hi)) => Footprint {

@@ -44,10 +44,9 @@ pub(super) struct LightSamples {
     pub(super) uvs: Vec<Vec2>,
     /// Storage index of the reference's sample `k`.
     pub(super) stored: Vec<u32>,
-    /// Box of each group's frame coordinates (empty for padding).
-    pub(super) group_box: Vec<FrameBox>,
-    /// The same boxes by bound (`x_lo`, `x_hi`, `y_lo`, `y_hi` of every group, padding's
-    /// zero), for passes over all groups at once.
+    /// The box of each group's frame coordinates by bound (`x_lo`, `x_hi`, `y_lo`, `y_hi`
+    /// of every group; zero for a group of padding alone), for passes over several groups
+    /// at once.
     pub(super) group_bounds: [Vec<f32>; 4],
     /// Frame coordinates of each sample, padded with zeros to whole words.
     pub(super) xs: Vec<f32>,
@@ -101,12 +100,12 @@ impl LightSamples {
         let uvs: Vec<Vec2> = order.iter().map(|&k| uvs[k]).collect();
         let mut xs: Vec<f32> = order.iter().map(|&k| xs[k]).collect();
         let mut ys: Vec<f32> = order.iter().map(|&k| ys[k]).collect();
-        let group_box = (0..uvs.len().div_ceil(64) * (64 / GROUP))
+        let group_box: Vec<FrameBox> = (0..uvs.len().div_ceil(64) * (64 / GROUP))
             .map(|g| {
                 let end = ((g + 1) * GROUP).min(uvs.len());
                 (g * GROUP..end).fold(EMPTY_BOX, |b, i| grow(b, xs[i], ys[i]))
             })
-            .collect::<Vec<FrameBox>>();
+            .collect();
         let group_bounds = std::array::from_fn(|k| {
             group_box
                 .iter()
@@ -126,13 +125,17 @@ impl LightSamples {
             words,
             uvs,
             stored,
-            group_box,
             group_bounds,
             xs,
             ys,
             ext,
             w,
         }
+    }
+
+    /// The box of group `g` (of real samples only: not one of padding alone).
+    pub(super) fn group_box(&self, g: usize) -> FrameBox {
+        self.group_bounds.each_ref().map(|b| b[g])
     }
 
     /// Number of samples.
