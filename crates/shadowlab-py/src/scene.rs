@@ -4,7 +4,7 @@ use crate::compare::{compare_frame, in_technique, make, CompareSpec};
 use crate::convert::{self, bad, py_err, vec3_of, vec3s};
 use crate::{PyCamera, PyLight};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBool, PyDict};
 use shadowlab::area_light::{AreaLight, DEFAULT_LIGHT_SAMPLES};
 use shadowlab::camera::Camera;
 use shadowlab::light::Light;
@@ -30,12 +30,18 @@ pub struct PyScene {
     faces: BTreeMap<usize, Vec<[u32; 3]>>,
 }
 
-/// Technique parameters from a Python mapping (values as `str()` gives them).
+/// Technique parameters from a Python mapping (values as `str()` gives them, `True` and
+/// `False` as `true` and `false`), so that the `params` of a result set them again.
 fn params_of(p: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String)>> {
     let mut out = Vec::new();
     if let Some(d) = p {
         for (k, v) in d.iter() {
-            out.push((k.str()?.to_string(), v.str()?.to_string()));
+            let text = if v.is_instance_of::<PyBool>() {
+                v.is_truthy()?.to_string()
+            } else {
+                v.str()?.to_string()
+            };
+            out.push((k.str()?.to_string(), text));
         }
     }
     Ok(out)

@@ -170,6 +170,21 @@ def test_compare_is_shaped_like_metrics_json():
     assert sl.techniques()[0] == "raytrace"
 
 
+def test_params_read_as_written_and_set_the_values_the_run_used():
+    scene = box_scene()
+    given = {"msm": {"depth-bias": 0.0003}, "cascaded": {"blend": "0.30"}}
+    m = scene.compare(["msm", "cascaded", "csm"], CAMERA, SUN, given)
+    by = {r["technique"]: r for r in m["results"]}
+    # Single-precision values read as a person writes them, not widened to double.
+    assert repr(by["msm"]["params"]["depth-bias"]) == "0.0003"
+    assert repr(by["cascaded"]["params"]["blend"]) == "0.3"
+    assert repr(by["csm"]["params"]["pivot"]) == "0.1"
+    for r in m["results"]:
+        t = r["technique"]
+        again = scene.render(t, CAMERA, SUN, r["params"])
+        assert np.array_equal(again, scene.render(t, CAMERA, SUN, given.get(t, {}))), t
+
+
 def test_area_lights_give_soft_shadows_measured_against_their_reference():
     scene = box_scene()
     rect = sl.Light.rect((0.0, 4.0, 0.0), (1.5, 0.0, 0.0), (0.0, 0.0, 1.5), samples=64)

@@ -40,21 +40,13 @@ fn parameters(t: &dyn ShadowTechnique) -> Vec<Parameter> {
         .map(|(key, default)| {
             let spec = specs.iter().find(|s| s.key == key);
             Parameter {
-                default: value_text(&default),
+                default: techniques::param_text(&default),
                 range: spec.map_or("-".to_string(), |s| s.range.to_string()),
                 meaning: spec.map_or("-".to_string(), |s| s.meaning.to_string()),
                 key,
             }
         })
         .collect()
-}
-
-/// A parameter value as `--param` takes it: strings without quotes.
-fn value_text(v: &serde_json::Value) -> String {
-    match v {
-        serde_json::Value::String(s) => s.clone(),
-        other => other.to_string(),
-    }
 }
 
 /// The technique's name, then a table of its parameters with a header line.

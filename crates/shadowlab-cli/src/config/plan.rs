@@ -69,18 +69,39 @@ pub fn plan(a: &CompareArgs) -> Result<(Vec<RunPlan>, ReferencePlan)> {
     let planned = plan_runs(a)?;
     let kind: PatternKind = a.reference_pattern.parse()?;
     let mut runs = Vec::new();
-    for (name, label, params) in &planned {
-        runs.push(RunPlan {
-            technique: make_technique(name, params)?,
-            label: label.clone(),
-        });
+    for (name, swept, params) in &planned {
+        let technique = make_technique(name, params)?;
+        let label = match swept {
+            None => name.clone(),
+            Some((k, v)) => format!("{name}.{k}={}", swept_value(technique.as_ref(), k, v)),
+        };
+        runs.push(RunPlan { technique, label });
+    }
+    let mut files = BTreeMap::new();
+    for RunPlan { label, .. } in &runs {
+        if let Some(other) = files.insert(slug(label), label) {
+            return Err(bad_input(format!(
+                "runs {other} and {label} would write the same report files; give them distinct values"
+            )));
+        }
     }
     let references = plan_references(&runs, a, kind)?;
     Ok((runs, references))
 }
 
-/// One planned run before its technique is made: technique name, label, parameters.
-type Planned = (String, String, Vec<(String, String)>);
+/// One planned run before its technique is made: technique name, the key and value
+/// text of its `--sweep` (if it is one value of a sweep), parameters.
+type Planned = (String, Option<(String, String)>, Vec<(String, String)>);
+
+/// A swept value as the run's label shows it: a number as the technique holds it, in
+/// the shortest form every table prints (`0.1` for `0.10`, `512` for `0512`); a word as
+/// written (`auto`, `none`).
+fn swept_value(t: &dyn ShadowTechnique, key: &str, text: &str) -> String {
+    match t.params().get(key) {
+        Some(v) if v.is_number() && text.trim().parse::<f64>().is_ok() => techniques::param_text(v),
+        _ => text.to_string(),
+    }
+}
 
 /// The technique names of `--techniques`.
 fn technique_names(a: &CompareArgs) -> Result<Vec<String>> {
@@ -153,14 +174,14 @@ fn plan_runs(a: &CompareArgs) -> Result<Vec<Planned>> {
         let base = params.get(n).cloned().unwrap_or_default();
         let mine: Vec<_> = sweeps.iter().filter(|s| &s.0 == n).collect();
         if mine.is_empty() {
-            runs.push((n.clone(), n.clone(), base));
+            runs.push((n.clone(), None, base));
             continue;
         }
         for (_, k, vals) in mine {
             for v in vals {
                 let mut p = base.clone();
                 p.push((k.clone(), v.clone()));
-                runs.push((n.clone(), format!("{n}.{k}={v}"), p));
+                runs.push((n.clone(), Some((k.clone(), v.clone())), p));
             }
         }
     }
@@ -177,14 +198,6 @@ fn plan_runs(a: &CompareArgs) -> Result<Vec<Planned>> {
             "--techniques and --sweep plan {} runs, more than the limit of {MAX_RUNS}",
             runs.len()
         )));
-    }
-    let mut files = BTreeMap::new();
-    for (_, label, _) in &runs {
-        if let Some(other) = files.insert(slug(label), label) {
-            return Err(bad_input(format!(
-                "runs {other} and {label} would write the same report files; give them distinct values"
-            )));
-        }
     }
     Ok(runs)
 }

@@ -6,6 +6,7 @@ use super::format::{bytes, esc, folded};
 use super::rows::reference_samples;
 use crate::charts;
 use crate::metrics::{Metrics, RunResult};
+use shadowlab::techniques::param_text;
 use std::fmt::Write as _;
 
 /// The measures a run is ranked by, each with its best (smallest) value over the runs.
@@ -65,7 +66,7 @@ fn run_row(o: &mut String, r: &RunResult, best: &Best) {
             format!(
                 "<span class=\"kv\">{}={}</span>",
                 esc(k),
-                esc(v.to_string().trim_matches('"'))
+                esc(&param_text(v))
             )
         })
         .collect();

@@ -22,8 +22,8 @@ pub mod variance;
 
 pub use crate::frame::{Frame, Stats, Visibility};
 pub use technique::{
-    check_range, find_param, in_key_order, not_read, parse_value, unknown_param, ParamRange,
-    ParamSpec, ShadowTechnique, Shadows, BIAS, RESOLUTION, SLOPE_BIAS,
+    check_range, find_param, in_key_order, not_read, param_text, param_value, parse_value,
+    unknown_param, ParamRange, ParamSpec, ShadowTechnique, Shadows, BIAS, RESOLUTION, SLOPE_BIAS,
 };
 
 use crate::error::{Error, Result};
@@ -79,6 +79,7 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
 
 #[cfg(test)]
 mod tests {
+    use super::technique::tests::significant_digits;
     use super::*;
 
     /// The parameter table is what `set_param` validates against and what the command line
@@ -99,10 +100,7 @@ mod tests {
                 if default.is_null() {
                     continue; // an optional parameter that is unset by default
                 }
-                let text = match default {
-                    serde_json::Value::String(s) => s.clone(),
-                    v => v.to_string(),
-                };
+                let text = param_text(default);
                 t.set_param(spec.key, &text)
                     .unwrap_or_else(|e| panic!("{name}.{}: default {text} refused: {e}", spec.key));
                 assert_eq!(&t.params()[spec.key], default, "{name}.{}", spec.key);
@@ -126,6 +124,53 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Every parameter's default, as the tables show it (`param_text`) and as
+    /// `metrics.json` records it (the JSON of `params()`), has no more digits than the
+    /// shortest decimal that reads back as the technique's `f32` (Rust's `{}` of that
+    /// `f32`); and that text, set back, gives the same `params()` value bit for bit.
+    /// (`param_value` is one-to-one on `f32`s, so the same value means the same `f32`.)
+    #[test]
+    fn every_default_prints_in_its_shortest_form_and_reads_back_bit_for_bit() {
+        let names = ALL.iter().chain(SOFT_VARIANTS).chain(&[EXACT_SOFT]);
+        let mut reals = 0;
+        for name in names {
+            let mut t = create(name).unwrap();
+            let params = t.params();
+            for spec in t.param_specs() {
+                let default = &params[spec.key];
+                let (text, json) = (param_text(default), default.to_string());
+                let what = format!("{name}.{} = {text} (JSON {json})", spec.key);
+                if let (ParamRange::Real(..), Some(x)) = (spec.range, default.as_f64()) {
+                    reals += 1;
+                    let used: f32 = text.parse().unwrap();
+                    let shortest = used.to_string();
+                    assert!(
+                        significant_digits(&text) <= significant_digits(&shortest),
+                        "{what} has more digits than {shortest}"
+                    );
+                    assert!(
+                        significant_digits(&json) <= significant_digits(&shortest),
+                        "{what}: its JSON has more digits than {shortest}"
+                    );
+                    assert_eq!((x as f32).to_bits(), used.to_bits(), "{what}");
+                }
+                if default.is_number() && !matches!(spec.range, ParamRange::Real(..)) {
+                    assert!(!text.contains(['.', 'e']), "{what}: an integer");
+                }
+                if default.is_null() {
+                    continue;
+                }
+                t.set_param(spec.key, &text).unwrap();
+                let back = &t.params()[spec.key];
+                assert_eq!(back, default, "{what} set back");
+                if let (Some(a), Some(b)) = (back.as_f64(), default.as_f64()) {
+                    assert_eq!(a.to_bits(), b.to_bits(), "{what} set back");
+                }
+            }
+        }
+        assert!(reals > 40, "only {reals} real parameters walked");
     }
 
     /// Values just outside `range`, each of which the table must refuse.

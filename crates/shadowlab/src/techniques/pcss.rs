@@ -30,8 +30,8 @@ use super::shadow_map::{
     render_light_maps, DEFAULT_CONSTANT_BIAS, DEFAULT_RESOLUTION, DEFAULT_SLOPE_BIAS,
 };
 use super::{
-    find_param, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, BIAS,
-    RESOLUTION, SLOPE_BIAS,
+    find_param, not_read, param_value, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
+    Stats, BIAS, RESOLUTION, SLOPE_BIAS,
 };
 use crate::error::Result;
 use crate::math::Vec3;
@@ -128,9 +128,9 @@ impl ShadowTechnique for Pcss {
     fn params(&self) -> BTreeMap<String, serde_json::Value> {
         BTreeMap::from([
             ("resolution".to_string(), self.resolution.into()),
-            ("bias".to_string(), self.bias.into()),
-            ("slope-bias".to_string(), self.slope_bias.into()),
-            ("light-size".to_string(), self.light_size.into()),
+            ("bias".to_string(), param_value(self.bias)),
+            ("slope-bias".to_string(), param_value(self.slope_bias)),
+            ("light-size".to_string(), param_value(self.light_size)),
             ("blocker-samples".to_string(), self.blocker_samples.into()),
             ("filter-samples".to_string(), self.filter_samples.into()),
         ])

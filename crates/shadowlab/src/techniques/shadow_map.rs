@@ -19,8 +19,8 @@
 //! is too large, and the blocky edges of magnified texels.
 
 use super::{
-    find_param, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, BIAS,
-    RESOLUTION, SLOPE_BIAS,
+    find_param, not_read, param_value, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
+    Stats, BIAS, RESOLUTION, SLOPE_BIAS,
 };
 use crate::error::{Error, Result};
 use crate::light::{cube_face, light_views, Light, LightView};
@@ -277,8 +277,8 @@ impl ShadowTechnique for ShadowMap {
     fn params(&self) -> BTreeMap<String, serde_json::Value> {
         let mut m = BTreeMap::from([
             ("resolution".to_string(), self.resolution.into()),
-            ("bias".to_string(), self.bias.into()),
-            ("slope-bias".to_string(), self.slope_bias.into()),
+            ("bias".to_string(), param_value(self.bias)),
+            ("slope-bias".to_string(), param_value(self.slope_bias)),
         ]);
         if self.kernel > 0 {
             m.insert("kernel".into(), self.kernel.into());

@@ -71,6 +71,39 @@ pub trait ShadowTechnique: Send {
     }
 }
 
+/// A real parameter's value as [`ShadowTechnique::params`] lists it: the number whose
+/// shortest decimal is the shortest decimal that reads back as `v` (`0.0005`, not the
+/// `0.0005000000237487257` that widening `v` to `f64` gives).
+///
+/// Every technique, in this crate or another, builds the value of each `f32` parameter
+/// with this function (never `serde_json::Value::from(f32)`), so that the listing, the
+/// reports, `metrics.json` and Python all show the value as a person would write it, and
+/// that text given back to [`ShadowTechnique::set_param`] sets the same `f32`, bit for
+/// bit. (The shortest decimal of an `f32` has at most 9 digits, so the `f64` nearest to
+/// it prints as that same decimal.) Integers, words and `f64` parameters need nothing of
+/// the kind: their JSON form is already their shortest. [`param_text`] prints any value.
+pub fn param_value(v: f32) -> serde_json::Value {
+    let shortest: f64 = v.to_string().parse().unwrap_or(f64::from(v));
+    serde_json::Value::from(shortest)
+}
+
+/// A parameter value as text, the way `--param KEY=VALUE` takes it and every table shows
+/// it: words without quotes, numbers in their shortest form without a bare `.0`
+/// (`0.0005`, `16`, `512`, `true`).
+pub fn param_text(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::String(s) => s.clone(),
+        serde_json::Value::Number(n) => {
+            let t = n.to_string();
+            match t.strip_suffix(".0") {
+                Some(whole) => whole.to_string(),
+                None => t,
+            }
+        }
+        other => other.to_string(),
+    }
+}
+
 /// The values a technique parameter accepts.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ParamRange {
@@ -304,5 +337,62 @@ pub fn check_range<T: PartialOrd + std::fmt::Display + Copy>(
         Ok(value)
     } else {
         Err(out_of_range(technique, key, value, lo, hi))
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// The significant digits of a decimal number's text (`0.00050` → 1, `3e-5` → 1,
+    /// `16.0` → 2, `512` → 3).
+    pub(crate) fn significant_digits(text: &str) -> usize {
+        let mantissa = text.trim_start_matches('-').split(['e', 'E']).next();
+        let digits: String = mantissa
+            .unwrap_or("")
+            .chars()
+            .filter(|c| *c != '.')
+            .collect();
+        digits.trim_start_matches('0').trim_end_matches('0').len()
+    }
+
+    /// `param_value` over a spread of non-negative finite `f32`s across every binade
+    /// (each 4099th bit pattern, subnormals included): the text it prints reads back as
+    /// the same `f32`, with no more significant digits than Rust's shortest `{}` of the
+    /// `f32`; the JSON number, narrowed as a reader of `metrics.json` would, is the same
+    /// `f32`; and the values rise with the `f32`s, so no two share one.
+    #[test]
+    fn a_real_parameter_prints_its_shortest_decimal_and_reads_back_bit_for_bit() {
+        let mut previous: Option<f64> = None;
+        for bits in (0..0x7f80_0000_u32).step_by(4099) {
+            let v = f32::from_bits(bits);
+            let value = param_value(v);
+            let x = value.as_f64().unwrap();
+            let text = param_text(&value);
+            let back: f32 = text.parse().unwrap();
+            assert_eq!(back.to_bits(), bits, "{v:e} printed {text}");
+            assert_eq!((x as f32).to_bits(), bits, "{v:e} recorded as {x:e}");
+            let shortest = v.to_string();
+            assert!(
+                significant_digits(&text) <= significant_digits(&shortest),
+                "{v:e}: {text} vs {shortest}"
+            );
+            assert!(
+                previous.is_none_or(|p| p < x),
+                "{v:e} not above the one before"
+            );
+            previous = Some(x);
+        }
+        for (v, text) in [
+            (0.0005_f32, "0.0005"),
+            (0.1, "0.1"),
+            (3e-5, "0.00003"),
+            (16.0, "16"),
+        ] {
+            assert_eq!(param_text(&param_value(v)), text);
+        }
+        assert_eq!(param_text(&serde_json::Value::from(512)), "512");
+        assert_eq!(param_text(&serde_json::Value::from("auto")), "auto");
+        assert_eq!(param_text(&serde_json::Value::from(true)), "true");
     }
 }

@@ -27,8 +27,8 @@
 use super::filtering::{DepthRange, FilterSettings, FilteredMaps, MapLayout};
 use super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
 use super::{
-    find_param, in_key_order, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
-    Stats, RESOLUTION,
+    find_param, in_key_order, not_read, param_value, parse_value, Frame, ParamSpec,
+    ShadowTechnique, Shadows, Stats, RESOLUTION,
 };
 use crate::error::Result;
 use crate::raster::{DepthBuffer, NO_TRIANGLE};
@@ -142,8 +142,11 @@ impl ShadowTechnique for Variance {
     fn params(&self) -> BTreeMap<String, serde_json::Value> {
         let mut m = BTreeMap::from([
             ("resolution".to_string(), self.resolution.into()),
-            ("min-variance".to_string(), self.min_variance.into()),
-            ("bleed-reduction".to_string(), self.bleed_reduction.into()),
+            ("min-variance".to_string(), param_value(self.min_variance)),
+            (
+                "bleed-reduction".to_string(),
+                param_value(self.bleed_reduction),
+            ),
         ]);
         self.filtering.params(&mut m);
         m

@@ -4,6 +4,7 @@
 
 use super::frame::Drawn;
 use super::session::Session;
+use shadowlab::techniques::param_text;
 
 /// The keys, two lines.
 const KEYS: [&str; 2] = [
@@ -18,7 +19,7 @@ pub fn lines(s: &Session, d: &Drawn, times: (f64, f64), error: Option<String>) -
     let (frame_ms, present_ms) = times;
     let mut out = Vec::new();
     let param = match s.main_param() {
-        Some((k, _, v)) => format!("  {k} {v}"),
+        Some((k, _, v)) => format!("  {k} {}", param_text(&v)),
         None => String::new(),
     };
     let progress = match s.technique.converged() {

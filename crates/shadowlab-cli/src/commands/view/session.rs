@@ -215,7 +215,7 @@ impl<'a> Session<'a> {
             }
             (ParamRange::Real(lo, hi), Some(v)) => {
                 let n = if up { v * 2.0 } else { v / 2.0 };
-                n.clamp(lo, hi).to_string()
+                techniques::param_text(&n.clamp(lo, hi).into())
             }
             _ => return,
         };

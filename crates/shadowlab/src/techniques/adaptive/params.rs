@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::raster;
 use crate::techniques::shadow_map::{DEFAULT_CONSTANT_BIAS, DEFAULT_SLOPE_BIAS};
 use crate::techniques::technique::{
-    check_range, find_param, parse_value, ParamRange, ParamSpec, BIAS, SLOPE_BIAS,
+    check_range, find_param, param_value, parse_value, ParamRange, ParamSpec, BIAS, SLOPE_BIAS,
 };
 use std::collections::BTreeMap;
 
@@ -210,9 +210,9 @@ impl Params {
             ("time-budget-ms".to_string(), opt(p.time_budget_ms, "none")),
             ("max-new-nodes".to_string(), p.max_new_nodes.into()),
             ("passes".to_string(), p.passes.into()),
-            ("oversampling".to_string(), p.oversampling.into()),
-            ("bias".to_string(), p.bias.into()),
-            ("slope-bias".to_string(), p.slope_bias.into()),
+            ("oversampling".to_string(), param_value(p.oversampling)),
+            ("bias".to_string(), param_value(p.bias)),
+            ("slope-bias".to_string(), param_value(p.slope_bias)),
             (
                 "cost-per-texel-ns".to_string(),
                 opt(p.cost_per_texel_ns, "auto"),

@@ -44,8 +44,8 @@ use super::shadow_map::{
     DEFAULT_SLOPE_BIAS,
 };
 use super::{
-    find_param, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, BIAS,
-    RESOLUTION, SLOPE_BIAS,
+    find_param, not_read, param_value, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
+    Stats, BIAS, RESOLUTION, SLOPE_BIAS,
 };
 use crate::error::Result;
 use crate::light::{Light, LightView};
@@ -370,9 +370,9 @@ impl ShadowTechnique for Cascaded {
                 "cascade-resolution".to_string(),
                 self.resolved_cascade_resolution().into(),
             ),
-            ("lambda".to_string(), self.lambda.into()),
+            ("lambda".to_string(), param_value(self.lambda)),
             ("stabilize".to_string(), self.stabilize.into()),
-            ("blend".to_string(), self.blend.into()),
+            ("blend".to_string(), param_value(self.blend)),
             (
                 "depth-bounds".to_string(),
                 match self.depth_bounds {
@@ -381,8 +381,8 @@ impl ShadowTechnique for Cascaded {
                 }
                 .into(),
             ),
-            ("bias".to_string(), self.bias.into()),
-            ("slope-bias".to_string(), self.slope_bias.into()),
+            ("bias".to_string(), param_value(self.bias)),
+            ("slope-bias".to_string(), param_value(self.slope_bias)),
             ("kernel".to_string(), self.kernel.into()),
         ])
     }

@@ -77,8 +77,8 @@ pub use reconstruction::Reconstruction;
 use super::filtering::{Channel, DepthRange, FilterSettings, FilteredMaps, MapLayout};
 use super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
 use super::{
-    find_param, in_key_order, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
-    Stats, RESOLUTION,
+    find_param, in_key_order, not_read, param_value, parse_value, Frame, ParamSpec,
+    ShadowTechnique, Shadows, Stats, RESOLUTION,
 };
 use crate::error::{Error, Result};
 use crate::math::Vec3;
@@ -273,10 +273,10 @@ impl ShadowTechnique for Convolution {
         let mut m = BTreeMap::from([
             ("resolution".to_string(), self.resolution.into()),
             ("m".to_string(), self.m.into()),
-            ("alpha".to_string(), self.alpha.into()),
-            ("offset".to_string(), self.resolved_offset().into()),
-            ("scale".to_string(), self.scale.into()),
-            ("pivot".to_string(), self.pivot.into()),
+            ("alpha".to_string(), param_value(self.alpha)),
+            ("offset".to_string(), param_value(self.resolved_offset())),
+            ("scale".to_string(), param_value(self.scale)),
+            ("pivot".to_string(), param_value(self.pivot)),
             (
                 "precision".to_string(),
                 match self.precision {

@@ -38,8 +38,8 @@ use super::shadow_map::{
     DIRECTIONAL_PAD,
 };
 use super::{
-    find_param, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, BIAS,
-    RESOLUTION, SLOPE_BIAS,
+    find_param, not_read, param_value, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
+    Stats, BIAS, RESOLUTION, SLOPE_BIAS,
 };
 use crate::error::{Error, Result};
 use crate::light::{Light, LightView};
@@ -270,12 +270,12 @@ impl ShadowTechnique for LightSpacePerspective {
             (
                 "n".to_string(),
                 match self.n {
-                    Some(n) => n.into(),
+                    Some(n) => param_value(n),
                     None => "auto".into(),
                 },
             ),
-            ("bias".to_string(), self.bias.into()),
-            ("slope-bias".to_string(), self.slope_bias.into()),
+            ("bias".to_string(), param_value(self.bias)),
+            ("slope-bias".to_string(), param_value(self.slope_bias)),
             ("kernel".to_string(), self.kernel.into()),
         ])
     }

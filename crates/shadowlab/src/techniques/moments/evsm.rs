@@ -30,8 +30,8 @@ use super::super::variance::{
     chebyshev, texel_depth_and_variance, BLEED_REDUCTION, DEFAULT_MIN_VARIANCE, MIN_VARIANCE,
 };
 use super::super::{
-    find_param, in_key_order, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
-    Stats, RESOLUTION,
+    find_param, in_key_order, not_read, param_value, parse_value, Frame, ParamSpec,
+    ShadowTechnique, Shadows, Stats, RESOLUTION,
 };
 use super::{grey, Bits, BITS, F16};
 use crate::error::Result;
@@ -207,10 +207,13 @@ impl ShadowTechnique for ExponentialVariance {
             ("resolution".to_string(), self.resolution.into()),
             ("moments".to_string(), self.moments.into()),
             ("bits".to_string(), self.bits.value().into()),
-            ("exponent-pos".to_string(), cp.into()),
-            ("exponent-neg".to_string(), cn.into()),
-            ("min-variance".to_string(), self.min_variance.into()),
-            ("bleed-reduction".to_string(), self.bleed_reduction.into()),
+            ("exponent-pos".to_string(), param_value(cp)),
+            ("exponent-neg".to_string(), param_value(cn)),
+            ("min-variance".to_string(), param_value(self.min_variance)),
+            (
+                "bleed-reduction".to_string(),
+                param_value(self.bleed_reduction),
+            ),
         ]);
         self.filtering.params(&mut m);
         m

@@ -29,8 +29,8 @@
 use super::super::filtering::{Channel, FilterSettings, FilteredMaps, MapLayout};
 use super::super::shadow_map::{check_resolution, DEFAULT_RESOLUTION};
 use super::super::{
-    find_param, in_key_order, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
-    Stats, RESOLUTION,
+    find_param, in_key_order, not_read, param_value, parse_value, Frame, ParamSpec,
+    ShadowTechnique, Shadows, Stats, RESOLUTION,
 };
 use super::hamburger;
 use super::{grey, Bits, Unorm16, BITS, UNORM16_MAX};
@@ -235,9 +235,9 @@ impl ShadowTechnique for MomentShadowMap {
             ("bits".to_string(), self.bits.value().into()),
             (
                 "moment-bias".to_string(),
-                self.resolved_moment_bias().into(),
+                param_value(self.resolved_moment_bias()),
             ),
-            ("depth-bias".to_string(), self.depth_bias.into()),
+            ("depth-bias".to_string(), param_value(self.depth_bias)),
         ]);
         self.filtering.params(&mut m);
         m

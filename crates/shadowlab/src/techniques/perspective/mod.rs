@@ -119,8 +119,8 @@ use super::shadow_map::{
     check_resolution, DEFAULT_CONSTANT_BIAS, DEFAULT_RESOLUTION, DEFAULT_SLOPE_BIAS,
 };
 use super::{
-    find_param, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows, Stats, BIAS,
-    RESOLUTION, SLOPE_BIAS,
+    find_param, not_read, param_value, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
+    Stats, BIAS, RESOLUTION, SLOPE_BIAS,
 };
 use crate::error::Result;
 use crate::light::Light;
@@ -191,8 +191,8 @@ impl ShadowTechnique for Perspective {
     fn params(&self) -> BTreeMap<String, serde_json::Value> {
         BTreeMap::from([
             ("resolution".to_string(), self.resolution.into()),
-            ("bias".to_string(), self.bias.into()),
-            ("slope-bias".to_string(), self.slope_bias.into()),
+            ("bias".to_string(), param_value(self.bias)),
+            ("slope-bias".to_string(), param_value(self.slope_bias)),
         ])
     }
 

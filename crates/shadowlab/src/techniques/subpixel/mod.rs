@@ -138,8 +138,8 @@ use super::shadow_map::{
     DEFAULT_CONSTANT_BIAS, DEFAULT_SLOPE_BIAS,
 };
 use super::{
-    check_range, find_param, not_read, parse_value, Frame, ParamSpec, ShadowTechnique, Shadows,
-    Stats, Visibility, BIAS, RESOLUTION, SLOPE_BIAS,
+    check_range, find_param, not_read, param_value, parse_value, Frame, ParamSpec, ShadowTechnique,
+    Shadows, Stats, Visibility, BIAS, RESOLUTION, SLOPE_BIAS,
 };
 use crate::error::Result;
 use crate::math::{ndc_to_uv, Vec3};
@@ -224,8 +224,8 @@ impl ShadowTechnique for Subpixel {
             ("samples".to_string(), self.samples.into()),
             ("pattern".to_string(), pattern_name(self.pattern).into()),
             ("resolution".to_string(), self.resolution.into()),
-            ("bias".to_string(), self.bias.into()),
-            ("slope-bias".to_string(), self.slope_bias.into()),
+            ("bias".to_string(), param_value(self.bias)),
+            ("slope-bias".to_string(), param_value(self.slope_bias)),
         ])
     }
 
