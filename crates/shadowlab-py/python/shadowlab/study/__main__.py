@@ -11,6 +11,7 @@ Bad input (an unreadable file, an unknown key) is one sentence on stderr and exi
 
 import argparse
 import json
+import os
 import shutil
 import sys
 import time
@@ -49,23 +50,45 @@ def load_toml(path: Path) -> Dict[str, Any]:
     return spec
 
 
+def _cpu_seconds() -> float:
+    """The CPU time of this process (a worker's), user and system."""
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
 def _bench(spec: Dict[str, Any], out: Path, workers: int, threads: int) -> Dict[str, Any]:
     """The study's wall time on 1 and on ``workers`` workers, each from an empty folder, the
-    clusters started (and their workers' imports done) before the clock starts."""
-    times = {}
+    clusters started (and their workers' imports done) before the clock starts; with the
+    share of the time the workers spent in jobs and the CPU cores they obtained (on a
+    machine shared with other work, fewer than the workers)."""
+    from dask.distributed import get_task_stream
+
+    times, busy, cores = {}, {}, {}
     for n in sorted({1, workers}):
         folder = out / f"bench-{n}-workers"
         shutil.rmtree(folder, ignore_errors=True)
         study = Study(**spec, out=folder)
         with local_client(n, threads) as client:
             client.run(lambda: __import__("shadowlab.study"))
-            t0 = time.perf_counter()
-            rows = study.run(client, progress=False)
-            times[n] = time.perf_counter() - t0
+            cpu0 = sum(client.run(_cpu_seconds).values())
+            with get_task_stream(client) as stream:
+                t0 = time.perf_counter()
+                rows = study.run(client, progress=False)
+                times[n] = time.perf_counter() - t0
+            cpu = sum(client.run(_cpu_seconds).values()) - cpu0
+        spans = [s for t in stream.data for s in t["startstops"] if s["action"] == "compute"]
+        busy[n] = sum(s["stop"] - s["start"] for s in spans) / (n * times[n])
+        cores[n] = cpu / times[n]
         print(f"{n} worker(s) x {threads} thread(s): {len(study.jobs)} jobs, {len(rows)} rows, "
-              f"{times[n]:.2f} s")
+              f"{times[n]:.2f} s; workers busy {busy[n]:.0%} of the time; "
+              f"CPU obtained {cores[n]:.2f} cores")
     result = {"jobs": len(study.jobs), "threads_per_worker": threads,
               "seconds": {str(k): v for k, v in times.items()},
+              "busy_share": {str(k): v for k, v in busy.items()},
+              "cores_obtained": {str(k): v for k, v in cores.items()},
+              "load_average": os.getloadavg()[0],
               "speedup": times[1] / times[workers]}
     print(f"speed-up with {workers} workers: {result['speedup']:.2f}x")
     (out / "bench.json").write_text(json.dumps(result, indent=2) + "\n")
@@ -85,7 +108,6 @@ def main(argv: Optional[List[str]] = None) -> int:
     try:
         spec = load_toml(a.study)
         if a.bench:
-            import os
             _bench(spec, a.out, a.workers or os.cpu_count() or 1, a.threads)
             return 0
         study = Study(**spec, out=a.out)
