@@ -45,9 +45,23 @@ def load_toml(path: Path) -> Dict[str, Any]:
     for required in ("scenes", "techniques"):
         if required not in spec:
             raise ShadowlabError(f"{path}: the study names no {required} (key {required!r})")
+    here = path.resolve().parent
+    spec["scenes"] = [_beside(here, s) for s in spec["scenes"]] \
+        if isinstance(spec["scenes"], list) else spec["scenes"]
     if "size" in spec:
         spec["size"] = tuple(spec["size"])
     return spec
+
+
+def _beside(folder: Path, scene: Any) -> Any:
+    """A scene file named relative to the study file, by its path from here; built-in
+    names and tables as they are."""
+    if isinstance(scene, str) and (folder / scene).exists():
+        return str(folder / scene)
+    if isinstance(scene, dict) and isinstance(scene.get("scene"), str) \
+            and (folder / scene["scene"]).exists():
+        return {**scene, "scene": str(folder / scene["scene"])}
+    return scene
 
 
 def _cpu_seconds() -> float:

@@ -3,6 +3,7 @@ they are described with (plain strings and dicts, so that a job travels to any w
 
 import hashlib
 import json
+import os
 import re
 from dataclasses import asdict, dataclass, field
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
@@ -173,6 +174,8 @@ def expand(
     jobs = []
     for s in scenes:
         spec, sparams = (s, {}) if isinstance(s, str) else (s["scene"], dict(s.get("params", {})))
+        if os.path.exists(spec):  # a file: by its absolute path, for workers elsewhere
+            spec = os.path.abspath(spec)
         for ln, l in light_specs.items():
             for cn, c in camera_specs.items():
                 jobs.append(Job(

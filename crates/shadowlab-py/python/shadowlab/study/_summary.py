@@ -72,7 +72,7 @@ def svg(summary: Any) -> str:
            f'font-family="sans-serif" font-size="11">',
            f'<rect width="{w}" height="{h}" fill="white"/>',
            f'<text x="{w / 2}" y="18" text-anchor="middle" font-size="13">median error against '
-           'median time (bars: up to the worst error)</text>']
+           'median time (bars: up to the worst error; an error of 0 on the bottom line)</text>']
     for e in range(x0, x1 + 1):
         out.append(f'<line x1="{sx(e):.1f}" y1="{top}" x2="{sx(e):.1f}" y2="{h - bottom}" stroke="#ddd"/>'
                    f'<text x="{sx(e):.1f}" y="{h - bottom + 15}" text-anchor="middle">{10.0 ** e:g}</text>')
