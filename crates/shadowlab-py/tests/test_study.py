@@ -155,3 +155,28 @@ def test_a_scene_that_does_not_load_is_one_error_row(tmp_path, client):
     assert "missing.obj" in bad["error"].iloc[0] and "\n" not in bad["error"].iloc[0]
     assert bad["technique"].isna().all()
     assert list(rows[rows["scene"] == "cage"]["label"]) == ["sm", "afsm"]
+
+
+def test_the_command_line_runs_a_toml_study_and_writes_its_summary(tmp_path, client, capsys):
+    from shadowlab.study.__main__ import main
+
+    (tmp_path / "study.toml").write_text(
+        'scenes = ["cage", "fence-leak", "nope.obj"]\ntechniques = ["sm", "afsm"]\n'
+        'size = [64, 48]\n[sweeps]\n"sm.resolution" = [256, 512]\n'
+    )
+    out = tmp_path / "out"
+    assert main([str(tmp_path / "study.toml"), "--out", str(out),
+                 "--scheduler", client.scheduler.address, "--quiet"]) == 0
+    rows = pd.read_parquet(out / "rows.parquet")
+    summary = pd.read_csv(out / "summary.csv")
+    assert list(summary["label"]) == ["sm.resolution=256", "sm.resolution=512", "afsm"]
+    for s in summary.itertuples():
+        errors = sorted(rows[rows["label"] == s.label]["mean_abs_error"])
+        assert len(errors) == s.rows == 2
+        assert s.median_mean_abs_error == pytest.approx((errors[0] + errors[1]) / 2, rel=1e-12)
+        assert s.worst_mean_abs_error == errors[-1]
+    assert "nope.obj" in (out / "summary.md").read_text()
+    assert (out / "summary.svg").read_text().startswith("<svg")
+    (tmp_path / "bad.toml").write_text('scenes = ["cage"]\ntechnique = ["sm"]\n')
+    assert main([str(tmp_path / "bad.toml"), "--out", str(out)]) == 2
+    assert "unknown key 'technique'" in capsys.readouterr().err
