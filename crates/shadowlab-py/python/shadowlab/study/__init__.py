@@ -37,12 +37,16 @@ __all__ = ["COLUMNS", "Job", "Study", "local_client", "summarize", "write_summar
 def local_client(workers: Optional[int] = None, threads: int = 1) -> Iterator[Any]:
     """A Dask client on a local cluster of ``workers`` processes (default: one per CPU), each
     running one job at a time on ``threads`` threads."""
+    import dask
     from dask.distributed import Client, LocalCluster
 
     n = workers or os.cpu_count() or 1
     env = {"RAYON_NUM_THREADS": str(threads)}
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                      dashboard_address=None, env=env) as cluster, Client(cluster) as client:
+    # A job lasts seconds: a worker is handed its next job when it finishes one (no queue
+    # of two on one worker while another idles at the end of the study).
+    with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}), \
+            LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                         dashboard_address=None, env=env) as cluster, Client(cluster) as client:
         client.wait_for_workers(n)
         yield client
 
