@@ -46,7 +46,7 @@ def local_client(workers: Optional[int] = None, threads: int = 1) -> Iterator[An
     # of two on one worker while another idles at the end of the study).
     with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}), \
             LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                         dashboard_address=None, env=env) as cluster, Client(cluster) as client:
+                         dashboard_address=":0", env=env) as cluster, Client(cluster) as client:
         client.wait_for_workers(n)
         yield client
 
