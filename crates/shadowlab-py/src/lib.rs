@@ -10,6 +10,7 @@
 mod compare;
 mod convert;
 mod scene;
+mod sweep;
 
 use convert::{bad, py_err, vec3_of, ShadowlabError};
 use pyo3::prelude::*;

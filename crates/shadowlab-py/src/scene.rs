@@ -2,6 +2,7 @@
 
 use crate::compare::{compare_frame, in_technique, make, CompareSpec};
 use crate::convert::{self, bad, py_err, vec3_of, vec3s};
+use crate::sweep::{plan_runs, sweeps_of, MAX_FRAMES};
 use crate::{PyCamera, PyLight};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
@@ -365,7 +366,13 @@ impl PyScene {
     /// Under an area light the reference is the soft-shadow reference with
     /// the light's `samples` per pixel, and `reference.mean_std_error` states its own
     /// noise.
-    #[pyo3(signature = (techniques = None, camera = None, light = None, params = None, reference_spp = 1, reference_pattern = "grid".to_string()))]
+    ///
+    /// `sweeps` maps `"technique.key"` to a list of values, as `--sweep`: one result per
+    /// value (labelled `technique.key=value`, with `sweep`), all over one camera pass and
+    /// one reference. `frames > 1` renders the scene's camera path (a still camera without
+    /// one) and measures every frame against its own reference (`results[i].frames`).
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (techniques = None, camera = None, light = None, params = None, reference_spp = 1, reference_pattern = "grid".to_string(), sweeps = None, frames = 1))]
     fn compare<'py>(
         slf: PyRef<'py, Self>,
         techniques: Option<Vec<String>>,
@@ -374,6 +381,8 @@ impl PyScene {
         params: Option<&Bound<'py, PyDict>>,
         reference_spp: u32,
         reference_pattern: String,
+        sweeps: Option<&Bound<'py, PyDict>>,
+        frames: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
         let py = slf.py();
         let (c, l, area, light_samples) = slf.resolve(camera, light)?;
@@ -395,14 +404,20 @@ impl PyScene {
                 per.insert(t, params_of(Some(&v))?);
             }
         }
+        if !(1..=MAX_FRAMES).contains(&frames) {
+            return Err(bad(format!(
+                "frames {frames} is out of range 1..={MAX_FRAMES}"
+            )));
+        }
+        let sweeps = sweeps_of(sweeps, &names)?;
         let spec = CompareSpec {
             kind: reference_pattern.parse().map_err(py_err)?,
-            names,
-            params: per,
+            runs: plan_runs(&names, &per, &sweeps)?,
             spp: reference_spp,
             pattern_name: reference_pattern,
             area,
             light_samples,
+            frames,
         };
         let scene = Arc::clone(&slf.inner);
         let metrics = py

@@ -7,7 +7,11 @@ frame's shadow term is RGB transmittance towards the light, 1 = lit:
 - ``Scene.render(technique, camera, light, params)`` -> ``(H, W, 3)`` float32;
 - ``Scene.visibility(points, normals, light)`` -> ``(n, 3)`` float32;
 - ``Scene.render_lights(technique, lights)`` -> one ``(H, W, 3)`` array per light;
-- ``Scene.compare(techniques)`` -> a dict shaped like the command line's ``metrics.json``.
+- ``Scene.compare(techniques)`` -> a dict shaped like the command line's ``metrics.json``
+  (with ``sweeps`` and ``frames`` as ``--sweep`` and ``--frames``).
+
+``shadowlab.study`` (the ``study`` extra) runs studies over many scenes, lights, cameras and
+parameter values on a Dask cluster.
 
 A light is punctual (``Light.directional``, ``point``, ``spot``) or has an area
 (``Light.rect``, ``disk``, ``sphere``, or ``light.sized(size)``): under an area light

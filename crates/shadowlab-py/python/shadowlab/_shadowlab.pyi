@@ -178,8 +178,13 @@ class Scene:
         params: Optional[Mapping[str, Params]] = None,
         reference_spp: int = 1,
         reference_pattern: str = "grid",
+        sweeps: Optional[Mapping[str, Sequence[Any]]] = None,
+        frames: int = 1,
     ) -> dict[str, Any]:
-        """Techniques against the ray-traced reference: a dict shaped like ``metrics.json``."""
+        """Techniques against the ray-traced reference: a dict shaped like ``metrics.json``.
+        ``sweeps`` (``{"technique.key": [values]}``) gives one result per value over one
+        camera pass and reference; ``frames > 1`` renders the scene's camera path, each
+        frame against its own reference (``results[i]["frames"]``)."""
 
 def techniques() -> list[str]:
     """Every technique name."""
