@@ -55,6 +55,11 @@
 //! translate = [-0.3, 0.0, 0.0]
 //!
 //! [[mesh]]
+//! file = "garden.obj"              # written Z-up
+//! up = "z"                         # the file's up axis (x, y, z, -x, -y, -z), turned first
+//! obj_kd_alpha = false             # keep materials without map_d whole (default: cut)
+//!
+//! [[mesh]]
 //! generator = "sphere"             # diameter 1, centred on the origin
 //! params = { segments = 48 }
 //! translate = [0.6, 0.35, 0.2]
@@ -116,6 +121,12 @@ pub fn load(path: &Path) -> Result<Scene> {
 
 /// Loads a TOML scene file whose mesh `file` paths resolve as `access` allows.
 pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
+    load_opts(path, access, true)
+}
+
+/// [`load_with`], its OBJ meshes cut out by their `map_Kd` alpha (where they have no
+/// `map_d`) when `obj_kd_alpha`, unless a mesh's own `obj_kd_alpha` key says otherwise.
+pub fn load_opts(path: &Path, access: &Access, obj_kd_alpha: bool) -> Result<Scene> {
     let bytes = super::read_input(path, MAX_SCENE_TEXT_BYTES)?;
     let fmt = |what: String| Error::format(path, what);
     let text = String::from_utf8(bytes).map_err(|e| {
@@ -133,8 +144,8 @@ pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
     let mut scene = Scene::new(name);
     for (i, spec) in file.mesh.iter().enumerate() {
         let label = format!("[[mesh]] {}", i + 1);
-        let part =
-            mesh::build(base, access, spec).map_err(|what| fmt(format!("{label}: {what}")))?;
+        let part = mesh::build(base, access, spec, obj_kd_alpha)
+            .map_err(|what| fmt(format!("{label}: {what}")))?;
         super::check_triangle_count(path, (scene.len() + part.len()) as u64)?;
         scene.append(&part);
     }
