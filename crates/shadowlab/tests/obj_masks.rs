@@ -194,3 +194,33 @@ fn up_is_refused_for_built_in_and_toml_scenes() {
     let e = shadowlab::scene::load_with("bunny", &Default::default(), &z).unwrap_err();
     assert!(e.is_bad_input() && e.to_string().contains("--up z"), "{e}");
 }
+
+#[test]
+fn a_toml_mesh_turns_up_by_its_up_key_and_keeps_its_cut_outs() {
+    let dir = support::scratch("toml-up");
+    let masked = data("masked");
+    let toml = |extra: &str| {
+        format!(
+            "[[mesh]]\nfile = {:?}\nup = \"z\"\n{extra}",
+            masked.join("cards-zup.obj").to_str().unwrap()
+        )
+    };
+    let path = dir.join("scene.toml");
+    let access = shadowlab::files::Access::anywhere();
+    std::fs::write(&path, toml("")).unwrap();
+    let turned = shadowlab::scene::toml::load_with(&path, &access).unwrap();
+    let y_up = shadowlab::scene::obj::load(&masked.join("cards.obj")).unwrap();
+    assert_eq!(turned.v0, y_up.v0);
+    assert_eq!(turned.uv, y_up.uv);
+    assert!(material(&turned, "leaf_kd").alpha_mask.is_some());
+    std::fs::write(&path, toml("obj_kd_alpha = false\n")).unwrap();
+    let whole = shadowlab::scene::toml::load_with(&path, &access).unwrap();
+    assert!(material(&whole, "leaf_kd").alpha_mask.is_none());
+    assert!(material(&whole, "leaf_d").alpha_mask.is_some());
+    std::fs::write(&path, toml("").replace("\"z\"", "\"up\"")).unwrap();
+    let e = shadowlab::scene::toml::load_with(&path, &access).unwrap_err();
+    assert!(
+        e.to_string().contains("`up` = \"up\" is not an axis"),
+        "{e}"
+    );
+}

@@ -53,11 +53,7 @@
 //! scale = 0.05
 //! rotate_deg = [0.0, 30.0, 0.0]    # Euler angles: about X, then Y, then Z (world axes)
 //! translate = [-0.3, 0.0, 0.0]
-//!
-//! [[mesh]]
-//! file = "garden.obj"              # written Z-up
-//! up = "z"                         # the file's up axis (x, y, z, -x, -y, -z), turned first
-//! obj_kd_alpha = false             # keep materials without map_d whole (default: cut)
+//! up = "y"                         # the file's up axis: x, y, z, -x, -y or -z (turned first)
 //!
 //! [[mesh]]
 //! generator = "sphere"             # diameter 1, centred on the origin
@@ -78,7 +74,11 @@
 //! - `file` loads a mesh with the loader for its extension. The file's materials are kept
 //!   unless `color`, `transmittance` or `opacity` override them (each override replaces
 //!   that property in all of the file's materials); a glTF file's own cameras and lights
-//!   are not used — the `[camera]` and `[light]` here are.
+//!   are not used — the `[camera]` and `[light]` here are. `up` names the file's up axis
+//!   (see [`crate::scene::up`]; a Z-up file takes `up = "z"`), turned before `scale`, the
+//!   rotation and `translate`; `obj_kd_alpha = false` keeps an OBJ file's materials
+//!   without `map_d` whole where their `map_Kd` image has alpha (the command line's
+//!   `--obj-kd-alpha` is the default).
 //! - `generator` makes a shape: `plane` (or `quad`): a 1 × 1 square at y = 0 facing +Y;
 //!   `box`: the unit cube `[-0.5, 0.5]³`; `sphere`: diameter 1 (`params.segments`
 //!   around, half as many from pole to pole; default [`DEFAULT_SPHERE_SEGMENTS`]). Any other
