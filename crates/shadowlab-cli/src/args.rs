@@ -104,6 +104,25 @@ pub struct SceneArgs {
     /// name files outside its folder; by default they are refused.
     #[arg(long = "allow-outside-scene-dir")]
     pub allow_outside_scene_dir: bool,
+    /// The axis of a mesh file that points up: x, y, z, -x, -y or -z. `--up z` stands a
+    /// Z-up file (SketchUp, 3ds Max, CAD tools, many scanners) upright: its point (x, y, z)
+    /// lands at (x, z, -y); the automatic camera, light and ground fit the turned scene.
+    #[arg(
+        long,
+        value_name = "AXIS",
+        default_value = "y",
+        allow_hyphen_values = true
+    )]
+    pub up: String,
+    /// Whether an OBJ material without `map_d` is cut out by the alpha channel of its
+    /// `map_Kd` image (when the image has one).
+    #[arg(
+        long = "obj-kd-alpha",
+        value_name = "true|false",
+        default_value_t = true,
+        action = clap::ArgAction::Set
+    )]
+    pub obj_kd_alpha: bool,
 }
 
 /// `shadowlab render`.

@@ -15,6 +15,7 @@ use shadowlab::area_light::AreaLight;
 use shadowlab::camera::{Camera, Projection};
 use shadowlab::light::Light;
 use shadowlab::math::Vec3;
+use shadowlab::scene::UpAxis;
 use std::collections::BTreeMap;
 
 /// A technique's parameters in effect, by key (values as the technique reports them).
@@ -253,6 +254,12 @@ pub struct SceneRecord {
     pub scene_source: String,
     /// The `--scene-param` values.
     pub scene_params: BTreeMap<String, String>,
+    /// The mesh file's up axis (`--up`): `x`, `y`, `z`, `-x`, `-y` or `-z`.
+    #[serde(default)]
+    pub up: UpAxis,
+    /// Whether OBJ `map_Kd` alpha cut materials out (`--obj-kd-alpha`; false before it).
+    #[serde(default)]
+    pub obj_kd_alpha: bool,
     /// Triangles rendered (after instancing and any added ground plane).
     pub triangles: usize,
     /// What the loader skipped or approximated, one sentence per kind.
@@ -265,6 +272,8 @@ impl From<&Setup> for SceneRecord {
             scene: setup.scene.name.clone(),
             scene_source: setup.source.clone(),
             scene_params: setup.params.clone(),
+            up: setup.up,
+            obj_kd_alpha: setup.obj_kd_alpha,
             triangles: setup.scene.len(),
             warnings: setup.scene.warnings.clone(),
         }

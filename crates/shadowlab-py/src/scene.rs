@@ -13,7 +13,7 @@ use shadowlab::math::{vec3, Vec3};
 use shadowlab::multi_light::PerLight;
 use shadowlab::points::{visibility_of_points, Points};
 use shadowlab::scene::mesh::IndexedMesh;
-use shadowlab::scene::{Material, Scene};
+use shadowlab::scene::{LoadOptions, Material, Scene, UpAxis};
 use shadowlab::techniques::{self, Frame, Shadows};
 use shadowlab::view::ViewSamples;
 use std::collections::BTreeMap;
@@ -125,13 +125,27 @@ impl PyScene {
 impl PyScene {
     /// A built-in scene by name, or a `.toml`, `.obj`, `.ply`, `.gltf` or `.glb` file
     /// (bare meshes get a ground plane, a camera and a light); `params` are a built-in
-    /// scene's parameters.
+    /// scene's parameters. `up` is a mesh file's up axis (`"z"` stands a Z-up file
+    /// upright); `obj_kd_alpha=False` keeps OBJ materials without `map_d` whole where their
+    /// `map_Kd` image has alpha.
     #[staticmethod]
-    #[pyo3(signature = (spec, params = None))]
-    fn load(py: Python<'_>, spec: String, params: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+    #[pyo3(signature = (spec, params = None, *, up = "y", obj_kd_alpha = true))]
+    fn load(
+        py: Python<'_>,
+        spec: String,
+        params: Option<&Bound<'_, PyDict>>,
+        up: &str,
+        obj_kd_alpha: bool,
+    ) -> PyResult<Self> {
         let params: BTreeMap<String, String> = params_of(params)?.into_iter().collect();
+        let up: UpAxis = up.parse().map_err(|e| bad(format!("up {e}")))?;
+        let options = LoadOptions {
+            up,
+            obj_kd_alpha,
+            ..Default::default()
+        };
         let s = py
-            .detach(|| shadowlab::auto_light::load(&spec, &params))
+            .detach(|| shadowlab::auto_light::load_with(&spec, &params, &options))
             .map_err(py_err)?;
         Ok(PyScene {
             inner: Arc::new(s),

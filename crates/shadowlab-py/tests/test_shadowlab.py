@@ -243,3 +243,23 @@ def test_orthographic_camera():
         sl.Camera.orthographic((0.0, 5.0, 7.0), (0.0, 0.0, 0.0), 1.0, xmag=0.0)
     with pytest.raises(sl.ShadowlabError, match="ymag"):
         sl.Camera.orthographic((0.0, 5.0, 7.0), (0.0, 0.0, 0.0), float("nan"))
+
+
+def test_up_axis_and_obj_cut_outs():
+    masked = REPO / "crates" / "shadowlab" / "assets" / "masked"
+    y_up = sl.Scene.load(str(masked / "cards.obj"))
+    z_up = sl.Scene.load(str(masked / "cards-zup.obj"), up="z")
+    # Turned upright, the Z-up file is its Y-up twin: same bounds, same shadows.
+    assert z_up.bounds == y_up.bounds
+    a = y_up.render("raytrace", y_up.camera.with_size(96, 72), y_up.light)
+    b = z_up.render("raytrace", y_up.camera.with_size(96, 72), y_up.light)
+    assert np.array_equal(a, b)
+    assert np.array_equal(z_up.render("afsm", y_up.camera.with_size(96, 72), y_up.light), b)
+    # The map_Kd card kept whole casts more shadow than cut out.
+    whole = sl.Scene.load(str(masked / "cards.obj"), obj_kd_alpha=False)
+    c = whole.render("raytrace", y_up.camera.with_size(96, 72), y_up.light)
+    assert (c[..., 0] < 0.5).sum() > (a[..., 0] < 0.5).sum()
+    with pytest.raises(sl.ShadowlabError, match=r'up "w" is not an axis'):
+        sl.Scene.load(str(masked / "cards.obj"), up="w")
+    with pytest.raises(sl.ShadowlabError, match=r"--up z .*bunny"):
+        sl.Scene.load("bunny", up="z")

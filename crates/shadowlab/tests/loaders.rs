@@ -70,6 +70,9 @@ const DATA_MESHES: &[(&str, usize)] = &[
     ("lenient/edges.obj", 8),
     ("lenient/lines.gltf", 3),
     ("masked/leaf.gltf", 4),
+    ("masked/cards.obj", 6),
+    ("masked/cards-zup.obj", 6),
+    ("masked/cards.gltf", 6),
 ];
 
 #[test]

@@ -10,7 +10,7 @@ use shadowlab::auto_light;
 use shadowlab::camera::{Camera, Projection};
 use shadowlab::light::Light;
 use shadowlab::math::Vec3;
-use shadowlab::scene::{self, Scene};
+use shadowlab::scene::{self, Scene, UpAxis};
 use std::collections::BTreeMap;
 
 /// A loaded scene with its resolved camera (first frame), light and path.
@@ -34,6 +34,10 @@ pub struct Setup {
     pub source: String,
     /// The `--scene-param` values.
     pub params: BTreeMap<String, String>,
+    /// The mesh file's up axis (`--up`).
+    pub up: UpAxis,
+    /// Whether OBJ `map_Kd` alpha cuts materials out (`--obj-kd-alpha`).
+    pub obj_kd_alpha: bool,
 }
 
 /// The most frames a sequence may have.
@@ -171,9 +175,15 @@ pub fn resolve(args: &SceneArgs) -> Result<Setup> {
         )));
     }
     let params = parse_kvs(&args.scene_params, "--scene-param")?;
+    let up: UpAxis = args
+        .up
+        .parse()
+        .map_err(|e| bad_input(format!("--up {e}")))?;
     let options = scene::LoadOptions {
         camera_index: args.camera_index,
         allow_outside_scene_dir: args.allow_outside_scene_dir,
+        up,
+        obj_kd_alpha: args.obj_kd_alpha,
     };
     let scene = auto_light::load_with(&args.scene, &params, &options)?;
     for w in &scene.warnings {
@@ -202,6 +212,8 @@ pub fn resolve(args: &SceneArgs) -> Result<Setup> {
         layers: args.layers,
         source: args.scene.clone(),
         params,
+        up,
+        obj_kd_alpha: args.obj_kd_alpha,
     })
 }
 

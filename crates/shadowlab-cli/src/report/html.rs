@@ -304,7 +304,7 @@ fn animations(o: &mut String, m: &Metrics, plots: &[Plot]) {
 fn provenance(o: &mut String, m: &Metrics) {
     let prov = json!({
         "scene_source": m.scene.scene_source, "scene_params": m.scene.scene_params,
-        "camera": m.camera, "light": m.light, "warnings": m.scene.warnings,
+        "up": m.scene.up, "camera": m.camera, "light": m.light, "warnings": m.scene.warnings,
     });
     let _ = write!(
         o,

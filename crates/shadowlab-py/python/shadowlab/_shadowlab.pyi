@@ -105,8 +105,17 @@ class Scene:
     """World-space triangles with their materials, and the camera and light they came with."""
 
     @staticmethod
-    def load(spec: str, params: Optional[Mapping[str, Any]] = None) -> Scene:
-        """A built-in scene name or a ``.toml``/``.obj``/``.ply``/``.gltf``/``.glb`` file."""
+    def load(
+        spec: str,
+        params: Optional[Mapping[str, Any]] = None,
+        *,
+        up: str = "y",
+        obj_kd_alpha: bool = True,
+    ) -> Scene:
+        """A built-in scene name or a ``.toml``/``.obj``/``.ply``/``.gltf``/``.glb`` file.
+
+        ``up`` is a mesh file's up axis (``"x"``, ``"y"``, ``"z"``, ``"-x"``, ``"-y"``,
+        ``"-z"``); ``obj_kd_alpha=False`` keeps OBJ materials without ``map_d`` whole."""
     @staticmethod
     def from_arrays(
         vertices: npt.ArrayLike,

@@ -18,6 +18,8 @@
 //! - [`alpha_mask`]: alpha-masked casters (a texture's alpha cutting triangles out).
 //! - [`mesh`]: meshes added and edited in place; [`export`]: a scene written back as OBJ;
 //!   `repeats`: faces that repeat an earlier opaque face, dropped on loading.
+//! - [`up`]: a mesh file's up axis, and the turn that stands a Z-up (or X-up…) file
+//!   upright in shadowlab's Y-up world.
 //!
 //! A scene loaded without a light keeps none here: the automatic light is chosen by a
 //! ray-traced estimate, which sits above this layer (the crate's `auto_light` module, whose
@@ -30,11 +32,14 @@ pub mod gltf;
 mod material;
 pub mod mesh;
 pub mod obj;
+mod obj_masks;
 pub mod ply;
 mod repeats;
 pub mod toml;
+pub mod up;
 
 pub use material::Material;
+pub use up::UpAxis;
 
 use crate::area_light::AreaLight;
 use crate::camera::{Camera, CameraPath, AUTO_VIEW_DIRECTION};
@@ -339,7 +344,7 @@ impl Scene {
 }
 
 /// Choices made while loading a scene.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LoadOptions {
     /// Which of the file's cameras to use: a glTF file's camera nodes in the order its
     /// hierarchy walk meets them; other scenes have at most one (index 0).
@@ -347,6 +352,24 @@ pub struct LoadOptions {
     /// Let glTF buffer URIs, OBJ `mtllib` lines and TOML mesh `file` paths name files
     /// outside the scene file's folder (by default they are refused).
     pub allow_outside_scene_dir: bool,
+    /// The axis of a mesh file (`.obj`, `.ply`, `.gltf`, `.glb`) that points up; the file
+    /// is turned so that it points up in shadowlab's Y-up world before it is framed (see
+    /// [`up`]). Built-in and TOML scenes are Y-up already (a TOML mesh has its own `up`).
+    pub up: UpAxis,
+    /// Let an OBJ material without `map_d` cut its triangles out by the alpha channel of
+    /// its `map_Kd` image, when that image has one (see [`obj`]). On by default.
+    pub obj_kd_alpha: bool,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        LoadOptions {
+            camera_index: 0,
+            allow_outside_scene_dir: false,
+            up: UpAxis::Y,
+            obj_kd_alpha: true,
+        }
+    }
 }
 
 /// Loads a scene from a spec: a built-in scene name, or a path to a `.toml` scene, an
@@ -398,7 +421,19 @@ fn load_spec(
         ext.as_deref(),
         Some("obj" | "ply" | "gltf" | "glb" | "toml")
     );
+    if options.up != UpAxis::Y && ext.as_deref() == Some("toml") {
+        return Err(Error::param(format!(
+            "--up {} turns mesh files (.obj, .ply, .gltf, .glb), not the TOML scene {spec}: give its meshes an `up` key",
+            options.up
+        )));
+    }
     if !is_file {
+        if options.up != UpAxis::Y {
+            return Err(Error::param(format!(
+                "--up {} turns mesh files (.obj, .ply, .gltf, .glb), not the built-in scene {spec}",
+                options.up
+            )));
+        }
         let s = builtin::generate(spec, params)?;
         s.validate()?;
         return Ok(s);
@@ -410,12 +445,13 @@ fn load_spec(
     }
     let access = files::Access::for_scene(path, options.allow_outside_scene_dir);
     let mut s = match ext.as_deref() {
-        Some("obj") => obj::load_with(path, &access)?,
+        Some("obj") => obj::load_opts(path, &access, options.obj_kd_alpha)?,
         Some("ply") => ply::load(path)?,
         Some("gltf" | "glb") => gltf::load_with(path, &access, options.camera_index)?,
-        Some("toml") => toml::load_with(path, &access)?,
+        Some("toml") => toml::load_opts(path, &access, options.obj_kd_alpha)?,
         _ => unreachable!("extension checked above"),
     };
+    s.turn_up(options.up);
     if s.name.is_empty() {
         s.name = file_name(path);
     }

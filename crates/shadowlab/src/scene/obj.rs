@@ -3,6 +3,9 @@
 //! Colours come from `Kd`; opacity from `d` (dissolve) or `Tr` (= 1 − d), and an explicit
 //! RGB `Tf` (transmission filter), taken as the transmittance when `d` < 1. Missing `.mtl`
 //! files and missing textures are not errors: the mesh loads with a default material.
+//! Alpha cut-outs come from `map_d`, or from the alpha of `map_Kd` (see `obj_masks`); a
+//! cut-out material's faces carry their texture coordinates (`vt`, with `v` turned to
+//! count from the image's top row as glTF's do).
 //!
 //! What cannot cast a shadow is skipped, and said once per kind in [`Scene::warnings`]:
 //! faces of one or two vertices (points and edges some exporters write among the
@@ -12,13 +15,15 @@
 //! does not exist, and a face of fewer than three vertices on a last line with no newline
 //! (the mark of a file cut short).
 
+use super::alpha_mask::AlphaMask;
+use super::obj_masks::Masks;
 use super::{Material, Scene};
 use crate::error::{Error, Result};
 use crate::files::{read_regular_file, Access, MAX_FILE_BYTES, MAX_SCENE_TEXT_BYTES};
-use crate::math::{vec3, Mat4, Vec3};
+use crate::math::{vec2, vec3, Mat4, Vec2, Vec3};
 use std::borrow::Cow;
 use std::cell::RefCell;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 const LOAD_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
     triangulate: true,
@@ -36,19 +41,35 @@ pub fn load(path: &Path) -> Result<Scene> {
 /// that do not exist are not errors (the mesh gets the default material); one that is
 /// not a regular file, or lies outside where `access` allows, is.
 pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
+    load_opts(path, access, true)
+}
+
+/// [`load_with`], where `kd_alpha` says whether the alpha channel of a material's
+/// `map_Kd` image cuts it out when it has no `map_d`.
+pub fn load_opts(path: &Path, access: &Access, kd_alpha: bool) -> Result<Scene> {
     let bytes = super::read_input(path, MAX_FILE_BYTES)?;
     let (text, warnings) = prefilter(path, &bytes)?;
     let triangles = check_lines(path, &bytes)?;
     super::check_triangle_count(path, triangles)?;
     let base = path.parent().unwrap_or(Path::new(""));
     let refused: RefCell<Option<String>> = RefCell::new(None);
+    // The folder of each library read, with its number of materials, in order.
+    let libraries: RefCell<Vec<(PathBuf, usize)>> = RefCell::new(Vec::new());
     let loader = |mtl: &Path| {
         let name = mtl.to_string_lossy();
-        let read = access
-            .resolve(base, &name)
-            .and_then(|full| read_regular_file(&full, MAX_SCENE_TEXT_BYTES));
+        let read = access.resolve(base, &name).and_then(|full| {
+            let text = read_regular_file(&full, MAX_SCENE_TEXT_BYTES)?;
+            Ok((full, text))
+        });
         match read {
-            Ok(text) => tobj::load_mtl_buf(&mut text.as_slice()),
+            Ok((full, text)) => {
+                let r = tobj::load_mtl_buf(&mut text.as_slice());
+                if let Ok((m, _)) = &r {
+                    let dir = full.parent().unwrap_or(Path::new("")).to_path_buf();
+                    libraries.borrow_mut().push((dir, m.len()));
+                }
+                r
+            }
             Err(why) => {
                 if why != "does not exist" && refused.borrow().is_none() {
                     *refused.borrow_mut() = Some(format!("its material library {name:?} {why}"));
@@ -62,8 +83,22 @@ pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
     if let Some(why) = refused.into_inner() {
         return Err(Error::format(path, why));
     }
-    let mut scene = build(path, &models, mats)?;
-    scene.warnings = warnings;
+    let mut reader = Masks::new(path, access, kd_alpha);
+    let mut masks = Vec::new();
+    if let Ok(mats) = &mats {
+        let dirs = libraries
+            .into_inner()
+            .into_iter()
+            .flat_map(|(dir, n)| std::iter::repeat_n(dir, n));
+        for (m, dir) in mats.iter().zip(dirs) {
+            masks.push(reader.mask(m, &dir)?);
+        }
+    }
+    let mut scene = build(path, &models, mats, &masks)?;
+    let mut all = warnings;
+    all.append(&mut scene.warnings);
+    all.extend(reader.warnings());
+    scene.warnings = all;
     Ok(scene)
 }
 
@@ -78,7 +113,7 @@ pub fn load_from_str(name: &str, obj: &str, mtl: Option<&str>) -> Result<Scene> 
     let (text, warnings) = prefilter(path, obj.as_bytes())?;
     let (models, mats) = tobj::load_obj_buf(&mut text.as_ref(), &LOAD_OPTIONS, loader)
         .map_err(|e| Error::format(path, format!("not a valid OBJ file ({e})")))?;
-    let mut scene = build(path, &models, mats)?;
+    let mut scene = build(path, &models, mats, &[])?;
     scene.warnings = warnings;
     Ok(scene)
 }
@@ -211,20 +246,25 @@ impl Skipped {
     }
 }
 
-/// Converts tobj's models and materials into a scene; `path` names the source in errors.
+/// Converts tobj's models and materials into a scene, material `i` cut out by `masks[i]`
+/// where there is one; `path` names the source in errors.
 fn build(
     path: &Path,
     models: &[tobj::Model],
     mats: std::result::Result<Vec<tobj::Material>, tobj::LoadError>,
+    masks: &[Option<AlphaMask>],
 ) -> Result<Scene> {
     // A missing or broken .mtl leaves every triangle with the default material.
     let mats = mats.unwrap_or_default();
     let mut scene = Scene::new(super::file_name(path));
     let default = scene.add_material(Material::default());
     let base = scene.materials.len() as u32;
-    for m in &mats {
-        scene.add_material(convert(m));
+    for (i, m) in mats.iter().enumerate() {
+        let mut material = convert(m);
+        material.alpha_mask = masks.get(i).cloned().flatten();
+        scene.add_material(material);
     }
+    let mut untextured = 0usize;
     for model in models {
         let mesh = &model.mesh;
         let nverts = mesh.positions.len() / 3;
@@ -260,9 +300,44 @@ fn build(
             Some(id) if id < mats.len() => base + id as u32,
             _ => default,
         };
-        scene.push_indexed(&positions, &tris, Mat4::IDENTITY, m);
+        if scene.materials[m as usize].alpha_mask.is_none() {
+            scene.push_indexed(&positions, &tris, Mat4::IDENTITY, m);
+            continue;
+        }
+        let uv = tex_coords(mesh);
+        untextured += usize::from(uv.is_none()) * tris.len();
+        scene.reserve(tris.len());
+        for (k, tri) in tris.iter().enumerate() {
+            let t = tri.map(|i| positions[i as usize]);
+            let c = uv.as_ref().map_or([Vec2::ZERO; 3], |uv| {
+                [0, 1, 2].map(|j| uv[mesh.texcoord_indices[3 * k + j] as usize])
+            });
+            scene.push_textured(t, c, m);
+        }
+    }
+    if untextured > 0 {
+        scene.warn(format!(
+            "{}: {untextured} faces of cut-out materials have no texture coordinates (vt) and read their texture at (0, 0)",
+            scene.name
+        ));
     }
     Ok(scene)
+}
+
+/// The texture coordinates of `mesh`'s `vt` statements, `v` turned to count from the
+/// image's top row (`1 − v`, as glTF's coordinates count); `None` when its faces carry
+/// none (or not one per face vertex).
+fn tex_coords(mesh: &tobj::Mesh) -> Option<Vec<Vec2>> {
+    let n = mesh.texcoords.len() / 2;
+    let whole = !mesh.texcoords.is_empty()
+        && mesh.texcoord_indices.len() == mesh.indices.len()
+        && mesh.texcoord_indices.iter().all(|&i| (i as usize) < n);
+    whole.then(|| {
+        mesh.texcoords
+            .chunks_exact(2)
+            .map(|c| vec2(c[0], 1.0 - c[1]))
+            .collect()
+    })
 }
 
 /// Checks the lines `tobj` would reject or silently drop, so the error can name the

@@ -74,6 +74,12 @@ pub fn render_args(v: &ViewState, output: &Path) -> Vec<String> {
     if s.allow_outside_scene_dir {
         a.push("--allow-outside-scene-dir".into());
     }
+    if s.up.trim() != "y" {
+        a.push(format!("--up={}", s.up.trim()));
+    }
+    if !s.obj_kd_alpha {
+        a.extend(["--obj-kd-alpha".into(), "false".into()]);
+    }
     if s.layers {
         a.push("--layers".into());
     }

@@ -73,6 +73,8 @@ mod meshes;
 mod nodes;
 mod textures;
 
+pub(crate) use textures::{decode_channel, Channel};
+
 use super::Scene;
 use crate::error::{Error, Result};
 use crate::files::{Access, MAX_FILE_BYTES};

@@ -2,7 +2,8 @@
 //! buffer view, a `data:` URI or a file beside the glTF file (where the file's access
 //! allows), its size checked against [`MAX_TEXTURE_SIDE`] and the memory limit before it
 //! is decoded (PNG, GIF; a JPEG has no alpha and is opaque without being decoded), and its
-//! alpha channel kept (255 everywhere for an image without one).
+//! alpha channel kept (255 everywhere for an image without one). The OBJ loader decodes
+//! its `map_d` and `map_Kd` images here too ([`decode_channel`]).
 
 use super::buffers::resolve_uri;
 use super::Loader;
@@ -59,7 +60,7 @@ impl Loader<'_> {
 
 /// The alpha channel of an encoded image, refused (with a phrase) when it cannot be
 /// decoded or is larger than the limits allow.
-fn decode_alpha(bytes: &[u8]) -> TextureResult {
+pub(crate) fn decode_alpha(bytes: &[u8]) -> TextureResult {
     if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
         // JPEG carries no alpha: opaque everywhere, whatever its size.
         return Ok(Arc::new(AlphaTexture {
@@ -68,16 +69,43 @@ fn decode_alpha(bytes: &[u8]) -> TextureResult {
             alpha: vec![255],
         }));
     }
+    decode_channel(bytes, Channel::Alpha).map(|t| t.expect("Alpha always gives a texture"))
+}
+
+/// Which channel of an image [`decode_channel`] keeps as the alpha texture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Channel {
+    /// The alpha channel; 255 everywhere for an image without one.
+    Alpha,
+    /// The alpha channel; `None` (without decoding) for an image without one.
+    AlphaOnly,
+    /// The alpha channel, or for an image without one its grey level (an OBJ `map_d`).
+    AlphaOrGrey,
+}
+
+/// The `channel` of an encoded image as an alpha texture, refused (with a phrase) when it
+/// cannot be decoded or is larger than the limits allow; `None` for [`Channel::AlphaOnly`]
+/// and an image without alpha.
+pub(crate) fn decode_channel(
+    bytes: &[u8],
+    channel: Channel,
+) -> std::result::Result<Option<Arc<AlphaTexture>>, String> {
     let reader = image::ImageReader::new(Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| format!("its format cannot be read ({e})"))?;
-    let (w, h) = reader
-        .into_dimensions()
+    let decoder = reader
+        .into_decoder()
         .map_err(|e| format!("it cannot be decoded ({e})"))?;
+    let (w, h) = image::ImageDecoder::dimensions(&decoder);
+    let has_alpha = image::ImageDecoder::color_type(&decoder).has_alpha();
+    drop(decoder);
     if w == 0 || h == 0 || w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE {
         return Err(format!(
             "its size {w}x{h} is outside 1..={MAX_TEXTURE_SIDE} texels a side"
         ));
+    }
+    if channel == Channel::AlphaOnly && !has_alpha {
+        return Ok(None);
     }
     // The decoder's RGBA buffer (up to 16 bytes a texel) and the kept alpha.
     let estimate = w as u64 * h as u64 * 17;
@@ -93,14 +121,16 @@ fn decode_alpha(bytes: &[u8]) -> TextureResult {
     let img = reader
         .decode()
         .map_err(|e| format!("it cannot be decoded ({e})"))?;
-    let alpha = if img.color().has_alpha() {
+    let alpha = if has_alpha {
         img.to_rgba8().pixels().map(|p| p.0[3]).collect()
+    } else if channel == Channel::AlphaOrGrey {
+        img.to_luma8().into_raw()
     } else {
         vec![255; w as usize * h as usize]
     };
-    Ok(Arc::new(AlphaTexture {
+    Ok(Some(Arc::new(AlphaTexture {
         width: w,
         height: h,
         alpha,
-    }))
+    })))
 }

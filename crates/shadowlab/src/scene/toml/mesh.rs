@@ -9,13 +9,23 @@ use crate::math::{vec3, Mat4, Vec3};
 use crate::scene::builtin::{
     self, shapes::add_box_faces, shapes::add_quad, shapes::add_unit_sphere, shapes::BoxFace,
 };
-use crate::scene::{gltf, obj, ply, Material, Scene};
+use crate::scene::{gltf, obj, ply, Material, Scene, UpAxis};
 use glam::Quat;
 use std::collections::BTreeMap;
 use std::path::Path;
 
 /// One `[[mesh]]` entry: its triangles in world space with their materials.
-pub(super) fn build(base: &Path, access: &Access, spec: &MeshSpec) -> Msg<Scene> {
+pub(super) fn build(
+    base: &Path,
+    access: &Access,
+    spec: &MeshSpec,
+    obj_kd_alpha: bool,
+) -> Msg<Scene> {
+    let up = match &spec.up {
+        Some(u) => u.parse::<UpAxis>().map_err(|e| format!("`up` = {e}"))?,
+        None => UpAxis::Y,
+    };
+    let kd_alpha = spec.obj_kd_alpha.unwrap_or(obj_kd_alpha);
     let mut part = match (&spec.file, &spec.generator) {
         (Some(_), Some(_)) => return Err("give either `file` or `generator`, not both".into()),
         (None, None) => return Err("give a `file` or a `generator`".into()),
@@ -23,10 +33,18 @@ pub(super) fn build(base: &Path, access: &Access, spec: &MeshSpec) -> Msg<Scene>
             if spec.params.is_some() {
                 return Err("`params` applies to generators only, not to files".into());
             }
-            load_file(base, access, f)?
+            load_file(base, access, f, kd_alpha)?
         }
-        (None, Some(g)) => generate(g, spec.params.as_ref(), spec.name.as_deref().unwrap_or(g))?,
+        (None, Some(g)) => {
+            if spec.obj_kd_alpha.is_some() {
+                return Err("`obj_kd_alpha` applies to OBJ files only, not to generators".into());
+            }
+            generate(g, spec.params.as_ref(), spec.name.as_deref().unwrap_or(g))?
+        }
     };
+    // The file's up axis first; `scale`, the rotation and `translate` act on the upright
+    // mesh.
+    part.turn_up(up);
     if part.is_empty() {
         return Err("it holds no triangles".into());
     }
@@ -70,7 +88,7 @@ pub(super) fn build(base: &Path, access: &Access, spec: &MeshSpec) -> Msg<Scene>
 
 /// Loads a mesh file named relative to the scene file (inside its folder unless `access`
 /// allows more); its camera and light are dropped.
-fn load_file(base: &Path, access: &Access, file: &str) -> Msg<Scene> {
+fn load_file(base: &Path, access: &Access, file: &str, kd_alpha: bool) -> Msg<Scene> {
     let shown: String = file.chars().take(120).collect();
     let full = access
         .resolve(base, file)
@@ -94,7 +112,7 @@ fn load_file(base: &Path, access: &Access, file: &str) -> Msg<Scene> {
         .map(|e| e.to_ascii_lowercase())
         .unwrap_or_default();
     let loaded = match ext.as_str() {
-        "obj" => obj::load_with(&full, access),
+        "obj" => obj::load_opts(&full, access, kd_alpha),
         "ply" => ply::load(&full),
         "gltf" | "glb" => gltf::load_with(&full, access, 0),
         "toml" => {

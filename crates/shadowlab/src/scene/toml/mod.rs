@@ -53,6 +53,7 @@
 //! scale = 0.05
 //! rotate_deg = [0.0, 30.0, 0.0]    # Euler angles: about X, then Y, then Z (world axes)
 //! translate = [-0.3, 0.0, 0.0]
+//! up = "y"                         # the file's up axis: x, y, z, -x, -y or -z (turned first)
 //!
 //! [[mesh]]
 //! generator = "sphere"             # diameter 1, centred on the origin
@@ -73,7 +74,11 @@
 //! - `file` loads a mesh with the loader for its extension. The file's materials are kept
 //!   unless `color`, `transmittance` or `opacity` override them (each override replaces
 //!   that property in all of the file's materials); a glTF file's own cameras and lights
-//!   are not used — the `[camera]` and `[light]` here are.
+//!   are not used — the `[camera]` and `[light]` here are. `up` names the file's up axis
+//!   (see [`crate::scene::up`]; a Z-up file takes `up = "z"`), turned before `scale`, the
+//!   rotation and `translate`; `obj_kd_alpha = false` keeps an OBJ file's materials
+//!   without `map_d` whole where their `map_Kd` image has alpha (the command line's
+//!   `--obj-kd-alpha` is the default).
 //! - `generator` makes a shape: `plane` (or `quad`): a 1 × 1 square at y = 0 facing +Y;
 //!   `box`: the unit cube `[-0.5, 0.5]³`; `sphere`: diameter 1 (`params.segments`
 //!   around, half as many from pole to pole; default [`DEFAULT_SPHERE_SEGMENTS`]). Any other
@@ -116,6 +121,12 @@ pub fn load(path: &Path) -> Result<Scene> {
 
 /// Loads a TOML scene file whose mesh `file` paths resolve as `access` allows.
 pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
+    load_opts(path, access, true)
+}
+
+/// [`load_with`], its OBJ meshes cut out by their `map_Kd` alpha (where they have no
+/// `map_d`) when `obj_kd_alpha`, unless a mesh's own `obj_kd_alpha` key says otherwise.
+pub fn load_opts(path: &Path, access: &Access, obj_kd_alpha: bool) -> Result<Scene> {
     let bytes = super::read_input(path, MAX_SCENE_TEXT_BYTES)?;
     let fmt = |what: String| Error::format(path, what);
     let text = String::from_utf8(bytes).map_err(|e| {
@@ -133,8 +144,8 @@ pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
     let mut scene = Scene::new(name);
     for (i, spec) in file.mesh.iter().enumerate() {
         let label = format!("[[mesh]] {}", i + 1);
-        let part =
-            mesh::build(base, access, spec).map_err(|what| fmt(format!("{label}: {what}")))?;
+        let part = mesh::build(base, access, spec, obj_kd_alpha)
+            .map_err(|what| fmt(format!("{label}: {what}")))?;
         super::check_triangle_count(path, (scene.len() + part.len()) as u64)?;
         scene.append(&part);
     }

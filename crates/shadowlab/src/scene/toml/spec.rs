@@ -119,6 +119,8 @@ pub(super) struct MeshSpec {
     pub(super) color: Option<V3>,
     pub(super) transmittance: Option<V3>,
     pub(super) opacity: Option<f32>,
+    pub(super) up: Option<String>,
+    pub(super) obj_kd_alpha: Option<bool>,
 }
 
 /// The scene file `text`, or the parse error with its line and column.
