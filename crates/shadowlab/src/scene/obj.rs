@@ -36,7 +36,9 @@ pub fn load(path: &Path) -> Result<Scene> {
 /// that do not exist are not errors (the mesh gets the default material); one that is
 /// not a regular file, or lies outside where `access` allows, is.
 pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
-    let bytes = super::read_input(path, MAX_FILE_BYTES)?;
+    let bytes = super::read_input(path, MAX_FILE_BYTES, |h| {
+        crate::files::sniff_text(h, "an OBJ file")
+    })?;
     let (text, warnings) = prefilter(path, &bytes)?;
     let triangles = check_lines(path, &bytes)?;
     super::check_triangle_count(path, triangles)?;

@@ -116,7 +116,9 @@ pub fn load(path: &Path) -> Result<Scene> {
 
 /// Loads a TOML scene file whose mesh `file` paths resolve as `access` allows.
 pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
-    let bytes = super::read_input(path, MAX_SCENE_TEXT_BYTES)?;
+    let bytes = super::read_input(path, MAX_SCENE_TEXT_BYTES, |h| {
+        crate::files::sniff_text(h, "a TOML scene")
+    })?;
     let fmt = |what: String| Error::format(path, what);
     let text = String::from_utf8(bytes).map_err(|e| {
         fmt(format!(
