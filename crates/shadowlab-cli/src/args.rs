@@ -227,9 +227,12 @@ pub struct BenchArgs {
     /// error against time with the Pareto front marked, per scene).
     #[arg(long)]
     pub plots: Option<PathBuf>,
-    /// Runs per measurement (the median is reported).
+    /// Runs per measurement (the median is reported), at least 1.
     #[arg(long, default_value_t = 3)]
     pub repeat: usize,
+    /// Let --json and --plots replace existing files.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `shadowlab view`.

@@ -10,6 +10,12 @@
 //!   checks have passed (a full disk, a size limit, a folder made unwritable meanwhile), a
 //!   caught panic, a broken invariant. An error the command line does not recognise is
 //!   counted here, not as input, so a failure is never blamed on the user by default.
+//!
+//! Standard output and error follow the conventions of command-line tools
+//! ([`set_signals`]): a closed pipe ends the run quietly by SIGPIPE (the shell's status
+//! 141, as for `cat`), a write that fails otherwise (a full disk) is one sentence and
+//! status 1, and a file-size limit (`ulimit -f`) is a failed write (status 1) instead of a
+//! SIGXFSZ that kills the run with its output half written.
 
 use std::fmt::Display;
 use std::sync::Mutex;
@@ -78,8 +84,41 @@ pub fn sentence(e: &anyhow::Error) -> String {
     parts.join(": ")
 }
 
+/// Signal dispositions for a command-line tool, set before anything is written: SIGPIPE
+/// back to its default (Rust ignores it, turning a closed pipe into a write error on every
+/// later `println!`), so a reader that stops reading ends the run quietly; SIGXFSZ
+/// ignored, so a write past the file-size limit fails with `EFBIG`, which is reported
+/// and leaves no partial file, rather than killing the run.
+pub fn set_signals() {
+    // SAFETY: setting the disposition of two signals to default or ignore installs no
+    // handler code; nothing else runs yet.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
+}
+
+/// Writes one line to stderr, ignoring a failure (there is nowhere left to report it).
+pub fn say(line: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "{line}");
+}
+
+/// The prefix of the panic `println!` and `eprintln!` raise when a write fails.
+const PRINT_FAILED: &str = "failed printing to std";
+
+/// The sentence for a failed write to standard output or error (a panic message of
+/// `println!`), or `None` for any other panic.
+fn print_failure(msg: &str) -> Option<String> {
+    let rest = msg.strip_prefix(PRINT_FAILED)?;
+    let (stream, why) = rest.split_once(": ").unwrap_or((rest, "unknown error"));
+    let why = why.split(" (os error").next().unwrap_or(why);
+    Some(format!("cannot write to std{stream} ({why})"))
+}
+
 /// What the panic hook saw of the last panic: its message and where it was raised.
-static LAST_PANIC: Mutex<Option<String>> = Mutex::new(None);
+/// `(true, sentence)` for a failed write to standard output or error, which is no bug.
+static LAST_PANIC: Mutex<Option<(bool, String)>> = Mutex::new(None);
 
 /// Runs `f`, turning a panic (on this thread or one of its workers, which rayon passes
 /// on) into an internal failure whose sentence names the message and where it was raised,
@@ -101,20 +140,25 @@ pub fn catch_panics<T>(f: impl FnOnce() -> anyhow::Result<T>) -> anyhow::Result<
             .map(|l| format!(" at {}:{}", l.file(), l.line()))
             .unwrap_or_default();
         if let Ok(mut last) = LAST_PANIC.lock() {
-            last.get_or_insert(format!("{msg}{place}"));
+            last.get_or_insert(match print_failure(&msg) {
+                Some(sentence) => (true, sentence),
+                None => (false, format!("{msg}{place}")),
+            });
         }
     }));
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
     let _ = std::panic::take_hook();
     outcome.unwrap_or_else(|_| {
-        let what = LAST_PANIC
-            .lock()
-            .ok()
-            .and_then(|mut l| l.take())
-            .unwrap_or_else(|| "panic".to_string());
-        Err(anyhow::anyhow!(
-            "internal failure (a bug in shadowlab, not your input): {what}"
-        ))
+        let what = LAST_PANIC.lock().ok().and_then(|mut l| l.take());
+        match what {
+            Some((true, sentence)) => Err(anyhow::anyhow!(sentence)),
+            Some((false, what)) => Err(anyhow::anyhow!(
+                "internal failure (a bug in shadowlab, not your input): {what}"
+            )),
+            None => Err(anyhow::anyhow!(
+                "internal failure (a bug in shadowlab, not your input): panic"
+            )),
+        }
     })
 }
 
@@ -186,6 +230,16 @@ mod tests {
         })
         .map(|_: usize| ());
         assert!(sentence(&r.unwrap_err()).contains("worker 7"));
+        // A failed print is a failed write, not a bug.
+        let r: anyhow::Result<()> = catch_panics(|| {
+            panic!("failed printing to stdout: No space left on device (os error 28)")
+        });
+        let e = r.unwrap_err();
+        assert_eq!(exit_code(&e), INTERNAL);
+        assert_eq!(
+            sentence(&e),
+            "cannot write to stdout (No space left on device)"
+        );
         // No panic: the result as it is.
         assert_eq!(catch_panics(|| Ok(3)).unwrap(), 3);
     }

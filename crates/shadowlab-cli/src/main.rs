@@ -10,6 +10,8 @@
 //!
 //! Exit codes: 0 on success, 2 for bad input (a file, a flag, a parameter, a scene), 1 for
 //! other failures (see `failure`). Errors are one sentence on stderr naming the culprit.
+//! A closed standard output (`shadowlab scenes | head -1`) ends the run quietly by
+//! SIGPIPE, as it ends `cat` or `grep`.
 
 mod args;
 mod bench;
@@ -33,6 +35,7 @@ use std::process::ExitCode;
 static ALLOC: shadowlab::limits::GuardedAlloc = shadowlab::limits::GuardedAlloc;
 
 fn main() -> ExitCode {
+    failure::set_signals();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => return usage_error(e),
@@ -41,7 +44,7 @@ fn main() -> ExitCode {
     match failure::catch_panics(|| run(cli)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", failure::sentence(&e));
+            failure::say(&format!("error: {}", failure::sentence(&e)));
             ExitCode::from(failure::exit_code(&e))
         }
     }
@@ -90,6 +93,6 @@ fn usage_error(e: clap::Error) -> ExitCode {
         .next()
         .unwrap_or("invalid arguments")
         .trim_start_matches("error: ");
-    eprintln!("error: {first} (see shadowlab --help)");
+    failure::say(&format!("error: {first} (see shadowlab --help)"));
     ExitCode::from(failure::BAD_INPUT)
 }

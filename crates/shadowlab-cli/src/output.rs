@@ -1,9 +1,16 @@
 //! Everything that writes files, below the commands that decide what to write.
 //!
-//! The files a command will write are checked before any work: each has the extension of
-//! its documented format, no two name the same file, none replaces an existing file
-//! without `--force`, none goes through a dangling symbolic link, and each one's folder
-//! exists. A report folder is recognised by a marker file only shadowlab writes. Then:
+//! The files a command will write are checked before any work ([`check`], the one check
+//! every command that writes uses): each has the extension of its documented format, no
+//! two name the same file (through a symbolic or hard link too: an existing file is known
+//! by its device and inode), none replaces an existing file without `--force`, none goes
+//! through a dangling symbolic link, and each one's folder exists. A folder a command
+//! fills with files it names as it goes (`render --dump`, `bench --plots`) must be new
+//! or empty, or `--force` given. A report folder is recognised by a marker file only
+//! shadowlab writes, and one holding a symbolic link is not taken for a report. Every
+//! file is written whole through [`shadowlab::files::write_whole`] (a temporary file
+//! renamed over the output), so a link left among the outputs is replaced, never written
+//! through, and a failed write leaves no partial file. Then:
 //! file names made from run labels ([`slug`]), pretty JSON ([`write_json`]), folders
 //! ([`create_dir`]) and animated GIFs written frame by frame ([`Animation`]); PNG images
 //! go through [`shadowlab::picture::save_png`]. A write that fails once the checks have passed is an internal failure
@@ -35,6 +42,8 @@ pub struct Planned {
     pub flag: String,
     /// The extensions its format allows (lower case, without the dot); empty: any.
     pub extensions: &'static [&'static str],
+    /// A folder the command fills, rather than a file.
+    pub folder: bool,
 }
 
 impl Planned {
@@ -44,28 +53,48 @@ impl Planned {
             path: path.to_path_buf(),
             flag: flag.into(),
             extensions,
+            folder: false,
+        }
+    }
+
+    /// A folder named by `flag` that the command fills with files of its own naming.
+    pub fn folder(path: &Path, flag: impl Into<String>) -> Self {
+        Planned {
+            folder: true,
+            ..Planned::new(path, flag, &[])
         }
     }
 }
 
-/// The absolute form of `path` that two spellings of one file share: its folder made
+/// What two spellings of one file share: an existing file's device and inode (the same
+/// through symbolic and hard links), else the absolute path with its folder made
 /// canonical (it exists, or the check fails first) and its name kept.
-fn identity(path: &Path) -> PathBuf {
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Identity {
+    Existing(u64, u64),
+    New(PathBuf),
+}
+
+fn identity(path: &Path) -> Identity {
+    use std::os::unix::fs::MetadataExt;
+    if let Ok(m) = std::fs::metadata(path) {
+        return Identity::Existing(m.dev(), m.ino());
+    }
     let parent = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
     let dir = std::fs::canonicalize(parent).unwrap_or_else(|_| parent.to_path_buf());
-    match path.file_name() {
+    Identity::New(match path.file_name() {
         Some(n) => dir.join(n),
         None => dir,
-    }
+    })
 }
 
 /// Checks every planned file (see the module doc); `force` allows replacing existing
 /// regular files, never folders or dangling links.
 pub fn check(planned: &[Planned], force: bool) -> Result<()> {
-    let mut seen: BTreeMap<PathBuf, &str> = BTreeMap::new();
+    let mut seen: BTreeMap<Identity, &str> = BTreeMap::new();
     for p in planned {
         let shown = p.path.display();
         if !p.extensions.is_empty() {
@@ -83,7 +112,11 @@ pub fn check(planned: &[Planned], force: bool) -> Result<()> {
                 )));
             }
         }
-        check_one(&p.path, &p.flag, force)?;
+        if p.folder {
+            check_folder(&p.path, &p.flag, force)?;
+        } else {
+            check_one(&p.path, &p.flag, force)?;
+        }
         if let Some(other) = seen.insert(identity(&p.path), &p.flag) {
             return Err(bad(format!(
                 "{} and {} both name the file {shown}; give each output its own file",
@@ -117,13 +150,51 @@ fn check_one(path: &Path, flag: &str, force: bool) -> Result<()> {
         }
         return Ok(());
     }
+    parent_exists(path, flag)
+}
+
+/// A folder the command fills: new (its parent exists), or an existing folder that is
+/// empty or, with `force`, holds files the command may replace.
+fn check_folder(dir: &Path, flag: &str, force: bool) -> Result<()> {
+    let shown = dir.display();
+    if std::fs::symlink_metadata(dir).is_err() {
+        return parent_exists(dir, flag);
+    }
+    let Ok(meta) = std::fs::metadata(dir) else {
+        return Err(bad(format!(
+            "{flag} {shown} is a symbolic link to a folder that does not exist"
+        )));
+    };
+    if !meta.is_dir() {
+        return Err(bad(format!("{flag} {shown} exists and is not a folder")));
+    }
+    let non_empty = std::fs::read_dir(dir)
+        .map_err(|e| {
+            bad(format!(
+                "{flag} {shown} {}",
+                shadowlab::files::io_reason(&e)
+            ))
+        })?
+        .next()
+        .is_some();
+    if non_empty && !force {
+        return Err(bad(format!(
+            "{flag} {shown} is a folder that already holds files, which this run may replace; pass --force to write into it"
+        )));
+    }
+    Ok(())
+}
+
+/// The folder that will hold `path` exists.
+fn parent_exists(path: &Path, flag: &str) -> Result<()> {
     let parent = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
     if !parent.is_dir() {
         return Err(bad(format!(
-            "{flag} {shown}: the folder {} does not exist",
+            "{flag} {}: the folder {} does not exist",
+            path.display(),
             parent.display()
         )));
     }
@@ -155,27 +226,45 @@ pub fn check_report_dir(dir: &Path, force: bool) -> Result<()> {
                 "--out {shown} is a non-empty folder that is not a shadowlab report; pass --force to write into it"
             )));
         }
-    } else {
-        let parent = match dir.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        if !parent.is_dir() {
+        if let (Some(link), false) = (first_link(dir), force) {
             return Err(bad(format!(
-                "--out {shown}: the folder {} does not exist",
-                parent.display()
+                "--out {shown} holds {}, a symbolic link, which shadowlab never writes in a report; pass --force to replace it",
+                link.display()
             )));
         }
+    } else {
+        parent_exists(dir, "--out")?;
     }
     Ok(())
+}
+
+/// The first symbolic link in `dir` or in the folders below it that a report makes.
+fn first_link(dir: &Path) -> Option<PathBuf> {
+    let mut folders = vec![dir.to_path_buf()];
+    while let Some(d) = folders.pop() {
+        for entry in std::fs::read_dir(&d).ok()?.flatten() {
+            let Ok(ft) = entry.file_type() else { continue };
+            if ft.is_symlink() {
+                return Some(entry.path());
+            }
+            if ft.is_dir() && folders.len() < 64 {
+                folders.push(entry.path());
+            }
+        }
+    }
+    None
 }
 
 /// Creates the report folder (checked by [`check_report_dir`]) with its marker.
 pub fn create_report_dir(dir: &Path) -> Result<()> {
     create_dir(dir)?;
-    let marker = dir.join(REPORT_MARKER);
-    std::fs::write(&marker, REPORT_MARKER_TEXT)
-        .with_context(|| format!("cannot write {}", marker.display()))
+    write_file(&dir.join(REPORT_MARKER), REPORT_MARKER_TEXT.as_bytes())
+}
+
+/// Writes `bytes` to `path` whole or not at all ([`shadowlab::files::write_whole`]).
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
+    shadowlab::files::write_whole(path, bytes)
+        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Creates a folder and its parents.
@@ -206,7 +295,7 @@ pub fn slug(s: &str) -> String {
 pub fn write_json(path: &Path, v: &impl Serialize) -> Result<()> {
     let text = serde_json::to_string_pretty(v)
         .with_context(|| format!("cannot write {}", path.display()))?;
-    std::fs::write(path, text + "\n").with_context(|| format!("cannot write {}", path.display()))
+    write_file(path, (text + "\n").as_bytes())
 }
 
 /// Display time of one animation frame in milliseconds (10 frames per second).
@@ -223,11 +312,22 @@ pub const ANIMATION_PAIR_MAX_WIDTH: u32 = 960;
 /// White columns between the panels of a side-by-side animation frame.
 const PAIR_GAP: u32 = 8;
 
-/// Writes an animated GIF frame by frame, so a walkthrough never sits in memory.
+/// Writes an animated GIF frame by frame, so a walkthrough never sits in memory: into a
+/// temporary file beside it, renamed over it by [`Animation::finish`] (dropped unfinished,
+/// the temporary file is removed).
 pub struct Animation {
-    encoder: GifEncoder<BufWriter<File>>,
+    encoder: Option<GifEncoder<BufWriter<File>>>,
     path: PathBuf,
+    partial: PathBuf,
     max_width: u32,
+}
+
+impl Drop for Animation {
+    fn drop(&mut self) {
+        if self.encoder.take().is_some() {
+            let _ = std::fs::remove_file(&self.partial);
+        }
+    }
 }
 
 impl Animation {
@@ -244,18 +344,33 @@ impl Animation {
     }
 
     fn create_with_width(path: &Path, max_width: u32) -> Result<Self> {
-        let file =
-            File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-        let mut encoder =
-            GifEncoder::new_with_speed(BufWriter::new(file), ANIMATION_QUANTIZE_SPEED);
-        encoder
+        let mut name = std::ffi::OsString::from(".");
+        name.push(path.file_name().unwrap_or_default());
+        name.push(format!(".{}.partial", std::process::id()));
+        let partial = path.with_file_name(name);
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&partial)
+            .with_context(|| format!("cannot create {}", path.display()))?;
+        let encoder = GifEncoder::new_with_speed(BufWriter::new(file), ANIMATION_QUANTIZE_SPEED);
+        let mut anim = Animation {
+            encoder: Some(encoder),
+            path: path.to_path_buf(),
+            partial,
+            max_width,
+        };
+        anim.encoder()?
             .set_repeat(Repeat::Infinite)
             .with_context(|| format!("cannot write {}", path.display()))?;
-        Ok(Animation {
-            encoder,
-            path: path.to_path_buf(),
-            max_width,
-        })
+        Ok(anim)
+    }
+
+    fn encoder(&mut self) -> Result<&mut GifEncoder<BufWriter<File>>> {
+        let shown = self.path.display().to_string();
+        self.encoder
+            .as_mut()
+            .with_context(|| format!("cannot write {shown}: already finished"))
     }
 
     /// Appends one frame of two images of one size side by side, `left` and `right`, with
@@ -289,19 +404,20 @@ impl Animation {
             0,
             Delay::from_numer_denom_ms(ANIMATION_FRAME_MS, 1),
         );
-        self.encoder
+        let shown = self.path.display().to_string();
+        self.encoder()?
             .encode_frame(frame)
-            .with_context(|| format!("cannot write {}", self.path.display()))
+            .with_context(|| format!("cannot write {shown}"))
     }
 
-    /// Finishes the file.
-    pub fn finish(self) -> Result<()> {
-        let path = self.path;
+    /// Finishes the file and puts it in place.
+    pub fn finish(mut self) -> Result<()> {
         // The GIF trailer is written when the encoder drops; the buffer flushes with it.
-        drop(self.encoder);
-        if !path.is_file() {
-            anyhow::bail!("cannot write {}", path.display());
+        drop(self.encoder.take());
+        let renamed = std::fs::rename(&self.partial, &self.path);
+        if renamed.is_err() {
+            let _ = std::fs::remove_file(&self.partial);
         }
-        Ok(())
+        renamed.with_context(|| format!("cannot write {}", self.path.display()))
     }
 }

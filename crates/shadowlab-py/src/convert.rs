@@ -1,4 +1,11 @@
-//! NumPy arrays in and out, and shadowlab's errors as Python exceptions.
+//! NumPy arrays in and out, integer arguments checked, and shadowlab's errors as Python
+//! exceptions.
+//!
+//! Every integer argument of the module is taken as an [`Int`] and converted by
+//! [`Int::get`], which raises `ShadowlabError` naming the argument for a negative value,
+//! one past the type's range or a value that is no integer (where a plain `u32` argument
+//! would raise an `OverflowError` naming nothing); integer arrays go through [`faces`] or
+//! [`indices`], which refuse fractions instead of truncating them.
 
 use numpy::ndarray::{Array2, Array3};
 use numpy::{AllowTypeChange, IntoPyArray, PyArray2, PyArray3, PyArrayLike2};
@@ -28,6 +35,69 @@ pub fn bad(msg: impl Into<String>) -> PyErr {
     ShadowlabError::new_err(msg.into())
 }
 
+/// An integer argument as Python gave it: any `int` (and anything with `__index__`),
+/// however large or negative, or what it is instead. Converted, and refused with its
+/// name, by [`Int::get`].
+#[derive(Clone, Debug)]
+pub struct Int(Given);
+
+#[derive(Clone, Debug)]
+enum Given {
+    /// An integer within 128 bits.
+    Small(i128),
+    /// An integer of more bits, shown by its number of decimal digits.
+    Huge(usize),
+    /// Not an integer: its `repr`, cut short.
+    Other(String),
+}
+
+impl Int {
+    /// The default value `v` of an argument.
+    pub const fn of(v: i128) -> Self {
+        Int(Given::Small(v))
+    }
+
+    /// The value as `T`, which must lie in `lo..=hi`; else a `ShadowlabError` naming
+    /// `name`, the value and the range.
+    pub fn get<T: TryFrom<i128>>(&self, name: &str, lo: i128, hi: i128) -> PyResult<T> {
+        let outside =
+            |v: &dyn std::fmt::Display| bad(format!("{name} = {v} is outside {lo}..={hi}"));
+        match &self.0 {
+            Given::Small(v) if (lo..=hi).contains(v) => T::try_from(*v).map_err(|_| outside(v)),
+            Given::Small(v) => Err(outside(v)),
+            Given::Huge(digits) => Err(outside(&format!("(an integer of {digits} digits)"))),
+            Given::Other(what) => Err(bad(format!("{name} must be an integer, not {what}"))),
+        }
+    }
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for Int {
+    type Error = PyErr;
+
+    fn extract(obj: pyo3::Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        Ok(Int(match obj.extract::<i128>() {
+            Ok(v) => Given::Small(v),
+            Err(_) if obj.is_instance_of::<pyo3::types::PyInt>() => {
+                let digits = obj.str().map(|s| s.to_string().len()).unwrap_or(0);
+                Given::Huge(digits)
+            }
+            Err(_) => {
+                let shown = obj.repr().map(|r| r.to_string()).unwrap_or_default();
+                Given::Other(shown.chars().take(40).collect())
+            }
+        }))
+    }
+}
+
+/// A sequence of integers, each in `0..count`, named `what` in errors (triangle ids).
+pub fn indices(v: &[Int], what: &str, count: usize) -> PyResult<Vec<u32>> {
+    let hi = (count as i128 - 1).min(i128::from(u32::MAX));
+    v.iter()
+        .enumerate()
+        .map(|(i, x)| x.get(&format!("{what}[{i}]"), 0, hi))
+        .collect()
+}
+
 /// An `(n, 3)` array of any real dtype as points, named `what` in errors.
 pub fn vec3s(a: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Vec3>> {
     let arr: PyArrayLike2<'_, f32, AllowTypeChange> = a.extract().map_err(|_| {
@@ -51,7 +121,9 @@ pub fn vec3s(a: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Vec3>> {
 
 /// An `(m, 3)` integer array as triangle indices into `vertices` vertices, named `what`.
 pub fn faces(a: &Bound<'_, PyAny>, what: &str, vertices: usize) -> PyResult<Vec<[u32; 3]>> {
-    let arr: PyArrayLike2<'_, i64, AllowTypeChange> = a.extract().map_err(|_| {
+    // Read as f64 so a fraction is seen (an i64 cast would truncate 0.5 to 0); vertex
+    // counts are below 2^53, where every integer is exact.
+    let arr: PyArrayLike2<'_, f64, AllowTypeChange> = a.extract().map_err(|_| {
         bad(format!(
             "{what} must be a 2-D array of integers of shape (m, 3)"
         ))
@@ -68,7 +140,12 @@ pub fn faces(a: &Bound<'_, PyAny>, what: &str, vertices: usize) -> PyResult<Vec<
     for (i, r) in v.rows().into_iter().enumerate() {
         let mut f = [0u32; 3];
         for (j, &x) in r.iter().enumerate() {
-            if x < 0 || x as u64 >= vertices as u64 {
+            if x.fract() != 0.0 {
+                return Err(bad(format!(
+                    "{what} row {i} names vertex {x}, which is not an integer"
+                )));
+            }
+            if !(x >= 0.0 && x < vertices as f64) {
                 return Err(bad(format!(
                     "{what} row {i} names vertex {x}, outside 0..{vertices}"
                 )));

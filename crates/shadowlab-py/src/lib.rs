@@ -12,7 +12,7 @@ mod convert;
 mod scene;
 mod sweep;
 
-use convert::{bad, py_err, vec3_of, ShadowlabError};
+use convert::{bad, py_err, vec3_of, Int, ShadowlabError};
 use pyo3::prelude::*;
 use shadowlab::area_light::{check_light_samples, AreaLight, DEFAULT_LIGHT_SAMPLES};
 use shadowlab::camera::{Camera, Projection};
@@ -27,17 +27,24 @@ pub struct PyCamera {
     pub inner: Camera,
 }
 
+/// `width` and `height` of an image, each in `1..=MAX_IMAGE_SIDE`.
+fn image_size(width: &Int, height: &Int) -> PyResult<(u32, u32)> {
+    let side = i128::from(shadowlab::camera::MAX_IMAGE_SIDE);
+    Ok((width.get("width", 1, side)?, height.get("height", 1, side)?))
+}
+
 #[pymethods]
 impl PyCamera {
     #[new]
-    #[pyo3(signature = (eye, target, fov_y_deg = 45.0, width = 1024, height = 768))]
+    #[pyo3(signature = (eye, target, fov_y_deg = 45.0, width = Int::of(1024), height = Int::of(768)))]
     fn new(
         eye: &Bound<'_, PyAny>,
         target: &Bound<'_, PyAny>,
         fov_y_deg: f32,
-        width: u32,
-        height: u32,
+        width: Int,
+        height: Int,
     ) -> PyResult<Self> {
+        let (width, height) = image_size(&width, &height)?;
         let c = Camera::look_at(
             vec3_of(eye, "camera eye")?,
             vec3_of(target, "camera target")?,
@@ -53,15 +60,16 @@ impl PyCamera {
     /// `2·xmag × 2·ymag` (world units) across its view axis; `xmag` defaults to `ymag`
     /// times the image's aspect.
     #[staticmethod]
-    #[pyo3(signature = (eye, target, ymag, xmag = None, width = 1024, height = 768))]
+    #[pyo3(signature = (eye, target, ymag, xmag = None, width = Int::of(1024), height = Int::of(768)))]
     fn orthographic(
         eye: &Bound<'_, PyAny>,
         target: &Bound<'_, PyAny>,
         ymag: f32,
         xmag: Option<f32>,
-        width: u32,
-        height: u32,
+        width: Int,
+        height: Int,
     ) -> PyResult<Self> {
+        let (width, height) = image_size(&width, &height)?;
         let xmag = xmag.unwrap_or(ymag * width as f32 / height.max(1) as f32);
         let c = Camera::orthographic(
             vec3_of(eye, "camera eye")?,
@@ -123,7 +131,8 @@ impl PyCamera {
 
     /// The same camera with another image size (an orthographic one keeps its `ymag`
     /// and widens or narrows its `xmag` with the image).
-    fn with_size(&self, width: u32, height: u32) -> PyResult<Self> {
+    fn with_size(&self, width: Int, height: Int) -> PyResult<Self> {
+        let (width, height) = image_size(&width, &height)?;
         let mut c = self.inner;
         (c.width, c.height) = (width, height);
         // An orthographic camera keeps its height and its pixels square.
@@ -229,13 +238,14 @@ impl PyLight {
     /// A parallelogram light `centre + s·edge_u + t·edge_v`, `s, t ∈ [-½, ½]` (full edges),
     /// emitting from both faces.
     #[staticmethod]
-    #[pyo3(signature = (centre, edge_u, edge_v, samples = DEFAULT_LIGHT_SAMPLES))]
+    #[pyo3(signature = (centre, edge_u, edge_v, samples = Int::of(DEFAULT_LIGHT_SAMPLES as i128)))]
     fn rect(
         centre: &Bound<'_, PyAny>,
         edge_u: &Bound<'_, PyAny>,
         edge_v: &Bound<'_, PyAny>,
-        samples: u32,
+        samples: Int,
     ) -> PyResult<Self> {
+        let samples = samples.get("samples", 0, u32::MAX.into())?;
         let a = AreaLight::Rect {
             centre: vec3_of(centre, "rect light centre")?,
             edge_u: vec3_of(edge_u, "rect light edge_u")?,
@@ -245,13 +255,14 @@ impl PyLight {
     }
     /// A disk light of `radius` about `centre`, facing along `normal` (both faces emit).
     #[staticmethod]
-    #[pyo3(signature = (centre, normal, radius, samples = DEFAULT_LIGHT_SAMPLES))]
+    #[pyo3(signature = (centre, normal, radius, samples = Int::of(DEFAULT_LIGHT_SAMPLES as i128)))]
     fn disk(
         centre: &Bound<'_, PyAny>,
         normal: &Bound<'_, PyAny>,
         radius: f32,
-        samples: u32,
+        samples: Int,
     ) -> PyResult<Self> {
+        let samples = samples.get("samples", 0, u32::MAX.into())?;
         let a = AreaLight::Disk {
             centre: vec3_of(centre, "disk light centre")?,
             normal: vec3_of(normal, "disk light normal")?,
@@ -261,8 +272,9 @@ impl PyLight {
     }
     /// A spherical light of `radius` about `centre`.
     #[staticmethod]
-    #[pyo3(signature = (centre, radius, samples = DEFAULT_LIGHT_SAMPLES))]
-    fn sphere(centre: &Bound<'_, PyAny>, radius: f32, samples: u32) -> PyResult<Self> {
+    #[pyo3(signature = (centre, radius, samples = Int::of(DEFAULT_LIGHT_SAMPLES as i128)))]
+    fn sphere(centre: &Bound<'_, PyAny>, radius: f32, samples: Int) -> PyResult<Self> {
+        let samples = samples.get("samples", 0, u32::MAX.into())?;
         let a = AreaLight::Sphere {
             centre: vec3_of(centre, "sphere light centre")?,
             radius,
@@ -272,8 +284,9 @@ impl PyLight {
     /// This punctual light given a size, as `--light-size`: a point light becomes a sphere
     /// of radius `size`, a spot light a disk of radius `size` facing its target, a
     /// directional light a sun of angular diameter `size` degrees.
-    #[pyo3(signature = (size, samples = DEFAULT_LIGHT_SAMPLES))]
-    fn sized(&self, size: f32, samples: u32) -> PyResult<Self> {
+    #[pyo3(signature = (size, samples = Int::of(DEFAULT_LIGHT_SAMPLES as i128)))]
+    fn sized(&self, size: f32, samples: Int) -> PyResult<Self> {
+        let samples = samples.get("samples", 0, u32::MAX.into())?;
         if self.area.is_some() {
             return Err(bad("sized: the light already has an area"));
         }

@@ -1,7 +1,7 @@
 //! `shadowlab.Scene`: a scene and the frames rendered from it.
 
 use crate::compare::{compare_frame, in_technique, make, CompareSpec};
-use crate::convert::{self, bad, py_err, vec3_of, vec3s};
+use crate::convert::{self, bad, py_err, vec3_of, vec3s, Int};
 use crate::sweep::{plan_runs, sweeps_of, MAX_FRAMES};
 use crate::{PyCamera, PyLight};
 use pyo3::prelude::*;
@@ -216,7 +216,8 @@ impl PyScene {
     /// Moves mesh `mesh` (added from arrays) to new vertex positions, same faces: a moving
     /// or deforming object. Techniques see the scene's revision change and drop what they
     /// kept for the old geometry.
-    fn set_mesh_vertices(&mut self, mesh: usize, vertices: &Bound<'_, PyAny>) -> PyResult<()> {
+    fn set_mesh_vertices(&mut self, mesh: Int, vertices: &Bound<'_, PyAny>) -> PyResult<()> {
+        let mesh: usize = mesh.get("mesh", 0, i128::from(u32::MAX))?;
         let f = self
             .faces
             .get(&mesh)
@@ -282,6 +283,7 @@ impl PyScene {
         params: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let (c, l, area, light_samples) = self.resolve(camera, light)?;
+        shadowlab::limits::check_frame(c.width, c.height, 1, "the camera").map_err(py_err)?;
         let params = params_of(params)?;
         let scene = Arc::clone(&self.inner);
         let vis = py
@@ -309,6 +311,8 @@ impl PyScene {
         params: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Vec<Bound<'py, PyAny>>> {
         let (c, l0, _, _) = self.resolve(camera, None)?;
+        shadowlab::limits::check_frame(c.width, c.height, lights.len(), "the camera")
+            .map_err(py_err)?;
         let params = params_of(params)?;
         if let Some(a) = lights.iter().find_map(|l| l.area) {
             return Err(bad(format!(
@@ -352,9 +356,12 @@ impl PyScene {
         light: Option<PyLight>,
         technique: String,
         params: Option<&Bound<'py, PyDict>>,
-        triangles: Option<Vec<u32>>,
+        triangles: Option<Vec<Int>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let py = points.py();
+        let triangles = triangles
+            .map(|t| convert::indices(&t, "triangles", self.inner.len()))
+            .transpose()?;
         let (_, l) = self.resolve_punctual(None, light, "Scene.visibility")?;
         let p = vec3s(points, "points")?;
         let n = vec3s(normals, "normals")?;
@@ -386,22 +393,33 @@ impl PyScene {
     /// one reference. `frames > 1` renders the scene's camera path (a still camera without
     /// one) and measures every frame against its own reference (`results[i].frames`).
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (techniques = None, camera = None, light = None, params = None, reference_spp = 1, reference_pattern = "grid".to_string(), sweeps = None, frames = 1))]
+    #[pyo3(signature = (techniques = None, camera = None, light = None, params = None, reference_spp = Int::of(1), reference_pattern = "grid".to_string(), sweeps = None, frames = Int::of(1)))]
     fn compare<'py>(
         slf: PyRef<'py, Self>,
         techniques: Option<Vec<String>>,
         camera: Option<PyCamera>,
         light: Option<PyLight>,
         params: Option<&Bound<'py, PyDict>>,
-        reference_spp: u32,
+        reference_spp: Int,
         reference_pattern: String,
         sweeps: Option<&Bound<'py, PyDict>>,
-        frames: usize,
+        frames: Int,
     ) -> PyResult<Bound<'py, PyAny>> {
+        let reference_spp: u32 = reference_spp.get("reference_spp", 1, u32::MAX.into())?;
         let py = slf.py();
         let (c, l, area, light_samples) = slf.resolve(camera, light)?;
         let names: Vec<String> =
             techniques.unwrap_or_else(|| techniques::ALL.iter().map(|s| s.to_string()).collect());
+        if names.len() > shadowlab::limits::MAX_RUNS {
+            return Err(bad(format!(
+                "techniques lists {} runs, more than the limit of {}",
+                names.len(),
+                shadowlab::limits::MAX_RUNS
+            )));
+        }
+        // Each run's result and the reference's are kept until the comparison is made.
+        shadowlab::limits::check_frame(c.width, c.height, names.len() + 1, "the camera")
+            .map_err(py_err)?;
         let mut per: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
         if let Some(d) = params {
             for (k, v) in d.iter() {
@@ -418,11 +436,7 @@ impl PyScene {
                 per.insert(t, params_of(Some(&v))?);
             }
         }
-        if !(1..=MAX_FRAMES).contains(&frames) {
-            return Err(bad(format!(
-                "frames {frames} is out of range 1..={MAX_FRAMES}"
-            )));
-        }
+        let frames: usize = frames.get("frames", 1, MAX_FRAMES as i128)?;
         let sweeps = sweeps_of(sweeps, &names)?;
         let spec = CompareSpec {
             kind: reference_pattern.parse().map_err(py_err)?,

@@ -155,6 +155,8 @@ impl Camera {
                 "camera has a non-finite eye, target, up or field of view",
             ));
         }
+        crate::light::far_out("camera eye", self.eye)?;
+        crate::light::far_out("camera target", self.target)?;
         if (self.target - self.eye).length_squared() == 0.0 {
             return Err(Error::param("camera eye and target are the same point"));
         }

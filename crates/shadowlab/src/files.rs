@@ -8,7 +8,12 @@
 //! the opened file is, refuses FIFOs, devices, sockets and folders by name, and reads at
 //! most the limit into a buffer reserved fallibly, so `/dev/zero`, a 3 GB file behind a
 //! 44-byte buffer or a short address-space limit end in a sentence, not in a hang or an
-//! abort.
+//! abort. A loader's own file goes through [`read_sniffed`], which shows the format check
+//! the first bytes before reading (or reserving room for) the rest.
+//!
+//! Every file shadowlab writes goes through [`write_whole`]: a temporary file beside it,
+//! renamed over it once complete, so a failed write leaves nothing behind and a link is
+//! replaced rather than written through.
 
 use crate::limits;
 use std::io::Read;
@@ -63,13 +68,9 @@ pub fn io_reason(e: &std::io::Error) -> String {
 /// at once and refusing a file longer than `limit` bytes; `Err` is a phrase that
 /// completes "`path` …", e.g. "is a FIFO (named pipe), not a regular file".
 pub fn read_regular_file(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
-    let mut bytes = read_prefix(path, limit.saturating_add(1))?;
+    let bytes = read_prefix(path, limit.saturating_add(1))?;
     if bytes.len() as u64 > limit {
-        bytes.clear();
-        return Err(format!(
-            "is larger than the limit of {} MiB",
-            limit.div_ceil(1 << 20)
-        ));
+        return Err(too_large(limit));
     }
     Ok(bytes)
 }
@@ -77,6 +78,81 @@ pub fn read_regular_file(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
 /// Reads at most `max` bytes from the start of the regular file `path` (a file longer
 /// than that is not an error: glTF buffers read only their declared length).
 pub fn read_prefix(path: &Path, max: u64) -> Result<Vec<u8>, String> {
+    let (file, len) = open_regular(path)?;
+    let mut bytes = reserve(len.min(max))?;
+    file.take(max)
+        .read_to_end(&mut bytes)
+        .map_err(|e| io_reason(&e))?;
+    Ok(bytes)
+}
+
+/// Bytes a loader's format check sees before the rest of a file is read (64 KiB): enough
+/// for a PLY header's first lines, a GLB header or the opening of a JSON document.
+pub const SNIFF_BYTES: u64 = 64 << 10;
+
+/// Why [`read_sniffed`] read no file: the file itself (a phrase for "`path` …", as
+/// [`read_regular_file`] gives), or its first bytes are not the format expected (the
+/// format check's phrase).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Unread {
+    /// Not a regular file, missing, unreadable, over the limit or over the memory limit.
+    File(String),
+    /// The format check refused the first [`SNIFF_BYTES`].
+    Format(String),
+}
+
+/// Reads the regular file `path` of at most `limit` bytes, as [`read_regular_file`] does,
+/// after handing its first [`SNIFF_BYTES`] to `sniff`: a file whose start is not the
+/// expected format (a 3 GB file of NUL bytes named `.ply`) is refused before the rest is
+/// read or any room is reserved for it.
+pub fn read_sniffed(
+    path: &Path,
+    limit: u64,
+    sniff: impl FnOnce(&[u8]) -> Result<(), String>,
+) -> Result<Vec<u8>, Unread> {
+    let (mut file, len) = open_regular(path).map_err(Unread::File)?;
+    let mut head = Vec::new();
+    (&mut file)
+        .take(SNIFF_BYTES.min(limit.saturating_add(1)))
+        .read_to_end(&mut head)
+        .map_err(|e| Unread::File(io_reason(&e)))?;
+    sniff(&head).map_err(Unread::Format)?;
+    if len > limit {
+        return Err(Unread::File(too_large(limit)));
+    }
+    let mut bytes = reserve(len.max(head.len() as u64)).map_err(Unread::File)?;
+    bytes.extend_from_slice(&head);
+    let rest = limit.saturating_add(1).saturating_sub(head.len() as u64);
+    file.take(rest)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Unread::File(io_reason(&e)))?;
+    if bytes.len() as u64 > limit {
+        return Err(Unread::File(too_large(limit)));
+    }
+    Ok(bytes)
+}
+
+/// A format check for text formats (OBJ, TOML, material libraries): the first bytes
+/// hold no NUL byte; `format` names the format ("an OBJ file").
+pub fn sniff_text(head: &[u8], format: &str) -> Result<(), String> {
+    match head.iter().position(|&b| b == 0) {
+        Some(i) => Err(format!(
+            "it is not {format}: byte {i} is a NUL byte, and the format is text"
+        )),
+        None => Ok(()),
+    }
+}
+
+fn too_large(limit: u64) -> String {
+    format!(
+        "is larger than the limit of {} MiB",
+        limit.div_ceil(1 << 20)
+    )
+}
+
+/// Opens the regular file `path` for reading, refusing anything else at once; returns
+/// the file and its length.
+fn open_regular(path: &Path) -> Result<(std::fs::File, u64), String> {
     // O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer. It has
     // no effect on regular files, which are the only ones read.
     let file = std::fs::OpenOptions::new()
@@ -93,7 +169,11 @@ pub fn read_prefix(path: &Path, max: u64) -> Result<Vec<u8>, String> {
     if let Some(kind) = special_kind(&meta.file_type()) {
         return Err(not_regular(kind));
     }
-    let want = meta.len().min(max);
+    Ok((file, meta.len()))
+}
+
+/// An empty buffer with room for `want` bytes, reserved fallibly.
+fn reserve(want: u64) -> Result<Vec<u8>, String> {
     let mut bytes = Vec::new();
     limits::try_reserve(&mut bytes, want as usize).map_err(|_| {
         format!(
@@ -101,10 +181,32 @@ pub fn read_prefix(path: &Path, max: u64) -> Result<Vec<u8>, String> {
             want.div_ceil(1 << 20)
         )
     })?;
-    file.take(max)
-        .read_to_end(&mut bytes)
-        .map_err(|e| io_reason(&e))?;
     Ok(bytes)
+}
+
+/// Writes `bytes` to `path` whole or not at all: into a new temporary file in the same
+/// folder, then renamed over `path`. A failed write (a full disk, a file-size limit)
+/// leaves no partial file and the old one untouched, and a `path` that is a link is
+/// replaced, never written through (the file it points to is not the output's).
+pub fn write_whole(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write;
+    let name = path.file_name().ok_or_else(|| {
+        std::io::Error::new(std::io::ErrorKind::InvalidInput, "the path names no file")
+    })?;
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(name);
+    tmp_name.push(format!(".{}.partial", std::process::id()));
+    let tmp = path.with_file_name(tmp_name);
+    let written = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&tmp)
+        .and_then(|mut f| f.write_all(bytes).and_then(|()| f.flush()));
+    let renamed = written.and_then(|()| std::fs::rename(&tmp, path));
+    if renamed.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    renamed
 }
 
 fn not_regular(kind: &str) -> String {
@@ -229,6 +331,61 @@ mod tests {
             .unwrap_err()
             .contains("larger than"));
         assert_eq!(read_prefix(&f, 4).unwrap(), vec![7u8; 4]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn the_format_check_sees_the_first_bytes_before_the_rest_is_read() {
+        let dir = std::env::temp_dir().join(format!("shadowlab-sniff-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let zeros = dir.join("zeros.obj");
+        // 3 GiB of zeros that take no disk; read whole they would take 3 GiB of memory.
+        std::fs::File::create(&zeros)
+            .unwrap()
+            .set_len(3 << 30)
+            .unwrap();
+        let seen = std::cell::Cell::new(0);
+        let e = read_sniffed(&zeros, MAX_FILE_BYTES, |h| {
+            seen.set(h.len());
+            sniff_text(h, "an OBJ file")
+        })
+        .unwrap_err();
+        assert_eq!(seen.get() as u64, SNIFF_BYTES);
+        assert_eq!(
+            e,
+            Unread::Format(
+                "it is not an OBJ file: byte 0 is a NUL byte, and the format is text".into()
+            )
+        );
+        // A file the check accepts is read whole, the first bytes included once.
+        let text = dir.join("tri.obj");
+        let body = "v 0 0 0\n".repeat(20_000);
+        std::fs::write(&text, &body).unwrap();
+        let read = read_sniffed(&text, MAX_FILE_BYTES, |h| sniff_text(h, "an OBJ file")).unwrap();
+        assert_eq!(read, body.as_bytes());
+        assert_eq!(
+            read_sniffed(&text, 10, |_| Ok(())).unwrap_err(),
+            Unread::File("is larger than the limit of 1 MiB".into())
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn writes_are_whole_and_replace_links_instead_of_following_them() {
+        let dir = std::env::temp_dir().join(format!("shadowlab-write-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let target = dir.join("theirs.txt");
+        std::fs::write(&target, "theirs").unwrap();
+        let link = dir.join("out.txt");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        write_whole(&link, b"ours").unwrap();
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "theirs");
+        assert_eq!(std::fs::read_to_string(&link).unwrap(), "ours");
+        assert!(std::fs::symlink_metadata(&link).unwrap().is_file());
+        // A write that fails leaves nothing behind.
+        assert!(write_whole(&dir.join("missing/out.txt"), b"x").is_err());
+        let names: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().collect();
+        assert_eq!(names.len(), 2, "{names:?}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -38,8 +38,8 @@ impl Light {
     pub fn validate(&self) -> Result<()> {
         match *self {
             Light::Directional { to_light } => {
-                let len2 = to_light.length_squared();
-                if !to_light.is_finite() || !len2.is_finite() || len2 < 1e-12 {
+                // Only the direction counts: a long vector is scaled, never refused.
+                if crate::math::direction(to_light).is_none() {
                     return Err(Error::param(
                         "directional light direction must be a finite, non-zero vector",
                     ));
@@ -55,6 +55,8 @@ impl Light {
                         "spot light position and target must be finite",
                     ));
                 }
+                far_out("spot light position", position)?;
+                far_out("spot light target", target)?;
                 let len2 = (target - position).length_squared();
                 if len2 == 0.0 {
                     return Err(Error::param("spot light target equals its position"));
@@ -74,6 +76,7 @@ impl Light {
                 if !position.is_finite() {
                     return Err(Error::param("point light position must be finite"));
                 }
+                far_out("point light position", position)?;
             }
         }
         Ok(())
@@ -87,7 +90,7 @@ impl Light {
                 if (to_light.length_squared() - 1.0).abs() > 4.0 * f32::EPSILON =>
             {
                 Light::Directional {
-                    to_light: to_light.normalize(),
+                    to_light: crate::math::direction(to_light).unwrap_or(to_light),
                 }
             }
             l => l,
@@ -364,6 +367,20 @@ pub fn light_views(light: &Light, receivers: &Aabb, scene: &Aabb, pad: f32) -> V
         )],
         Light::Point { position } => LightView::cube(position, scene).to_vec(),
     }
+}
+
+/// Refuses a point beyond ±[`crate::math::MAX_COORDINATE`], naming it as `what`.
+pub(crate) fn far_out(what: &str, p: Vec3) -> Result<()> {
+    if crate::math::within_coordinate_limit(p) {
+        return Ok(());
+    }
+    Err(Error::param(format!(
+        "{what} ({:e}, {:e}, {:e}) lies beyond ±{:e} on an axis, too far out for distances in single precision; bring it nearer the scene",
+        p.x,
+        p.y,
+        p.z,
+        crate::math::MAX_COORDINATE
+    )))
 }
 
 #[cfg(test)]

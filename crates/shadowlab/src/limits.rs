@@ -82,6 +82,37 @@ pub fn check_bytes(what: impl FnOnce() -> String, bytes: u64) -> Result<()> {
     Ok(())
 }
 
+/// The most runs (techniques and their parameter sweeps) one comparison may plan, on the
+/// command line and in Python alike.
+pub const MAX_RUNS: usize = 128;
+
+/// Bytes a frame holds per pixel whatever the techniques: the camera pass's samples (68),
+/// the rasterizer's depth and id tiles while they are assembled (16), the shaded images
+/// and the animation frame (about 12), and the technique's per-pixel working set (afsm's
+/// samples and lists, the largest, about 32).
+pub const BYTES_PER_PIXEL: u64 = 128;
+
+/// Bytes each result kept until the end of a run holds per pixel: its visibility (16),
+/// with the error image and the comparison's working set in `compare` (16).
+pub const RESULT_BYTES_PER_PIXEL: u64 = 32;
+
+/// Refuses a `width × height` frame whose camera pass and `results` kept results (a
+/// render keeps one; a comparison one per run and the reference's) would need more than
+/// [`memory_limit`], before anything is rendered; `what` names where the size came from
+/// (`"--width/--height"`, `"the camera"`).
+pub fn check_frame(width: u32, height: u32, results: usize, what: &str) -> Result<()> {
+    let pixels = width as u64 * height as u64;
+    let per = BYTES_PER_PIXEL + RESULT_BYTES_PER_PIXEL * results as u64;
+    check_bytes(
+        || {
+            format!(
+                "a {width}x{height} image ({what}) with {results} result(s) kept: {pixels} pixels"
+            )
+        },
+        pixels.saturating_mul(per),
+    )
+}
+
 thread_local! {
     /// Depth of fallible allocations on this thread: while above zero, [`GuardedAlloc`]
     /// returns a failed allocation to its caller instead of ending the process.

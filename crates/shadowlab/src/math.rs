@@ -11,6 +11,28 @@ pub fn ndc_to_uv(clip: Vec4) -> (f32, f32) {
     (clip.x / clip.w * 0.5 + 0.5, 0.5 - clip.y / clip.w * 0.5)
 }
 
+/// The largest coordinate a camera or a light may have (1e18): the squared distance of
+/// two points this far out still fits in `f32` (whose largest value is 3.4e38), so a
+/// view direction or a distance computed from them is finite.
+pub const MAX_COORDINATE: f32 = 1e18;
+
+/// True when every component of `v` lies within ±[`MAX_COORDINATE`].
+pub fn within_coordinate_limit(v: Vec3) -> bool {
+    v.abs().max_element() <= MAX_COORDINATE
+}
+
+/// The unit vector along `v`, without overflow or underflow: scaled by its largest
+/// component first, so `(3e38, 3e38, 3e38)` gives the diagonal where `normalize` (whose
+/// squared length overflows) gives zero or NaN. `None` for a zero or non-finite `v`.
+pub fn direction(v: Vec3) -> Option<Vec3> {
+    let largest = v.abs().max_element();
+    if !(largest.is_finite() && largest > 0.0) {
+        return None;
+    }
+    let u = (v / largest).normalize();
+    u.is_finite().then_some(u)
+}
+
 /// An axis-aligned bounding box. The empty box has `min = +inf`, `max = -inf`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
@@ -401,6 +423,16 @@ impl TestRng {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn directions_are_scaled_before_they_are_normalized() {
+        let d = direction(vec3(3e38, 3e38, 3e38)).unwrap();
+        assert!((d - Vec3::splat(1.0 / 3f32.sqrt())).abs().max_element() < 1e-6);
+        let tiny = direction(vec3(1e-30, 0.0, 0.0)).unwrap();
+        assert_eq!(tiny, Vec3::X);
+        assert!(direction(Vec3::ZERO).is_none());
+        assert!(direction(vec3(f32::INFINITY, 0.0, 0.0)).is_none());
+    }
 
     #[test]
     fn watertight_shared_edge_is_hit_once_or_twice_never_missed() {

@@ -28,9 +28,10 @@ pub fn to_srgb8(c: Vec3) -> [u8; 3] {
     })
 }
 
-/// Writes `bytes` to `path`, naming the file when the write fails.
-fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
-    std::fs::write(path, bytes).map_err(|e| Error::Output {
+/// Writes `bytes` to `path` whole or not at all ([`crate::files::write_whole`]), naming
+/// the file when the write fails.
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
+    crate::files::write_whole(path, bytes).map_err(|e| Error::Output {
         path: path.into(),
         what: e.to_string(),
     })

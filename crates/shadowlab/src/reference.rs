@@ -37,6 +37,10 @@ pub struct Reference<'s> {
     bvh_scale: f32,
     /// BVH build time in milliseconds.
     pub build_ms: f64,
+    /// Whether some material lets light through, found once at build (a scan of the
+    /// materials per shadow ray would cost as much as the ray on scenes of many
+    /// materials).
+    transparent: bool,
 }
 
 /// The closest surface along a ray.
@@ -90,6 +94,7 @@ impl<'s> Reference<'s> {
             bvh,
             bvh_scale,
             build_ms: t0.elapsed().as_secs_f64() * 1e3,
+            transparent: scene.has_transparency(),
         }
     }
 
@@ -118,7 +123,7 @@ impl<'s> Reference<'s> {
         let s = self.bvh_scale;
         let ray = Ray::new(Vec3A::from(o * s), Vec3A::from(dir), 0.0, t_max * s);
         let prim = &self.bvh.primitive_indices;
-        if !scene.has_transparency() {
+        if !self.transparent {
             let miss = self.bvh.ray_traverse_miss(ray, |_, id| {
                 let tri = prim[id];
                 if tri == own {

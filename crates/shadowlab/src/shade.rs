@@ -140,10 +140,53 @@ pub fn write_visibility_exr(path: &Path, view: &ViewSamples, vis: &Visibility) -
 
 /// Reads a visibility EXR written by [`write_visibility_exr`]: the shadow term and the
 /// coverage mask.
+///
+/// The file is read as the loaders read theirs ([`crate::files::read_sniffed`]): a regular
+/// file only, refused unless it starts with the OpenEXR magic number, and its size read
+/// from its header and checked against the image limits and the memory limit before it
+/// is decoded.
 pub fn read_visibility_exr(path: &Path) -> Result<(Visibility, Vec<bool>)> {
-    let img = image::open(path)
-        .map_err(|e| Error::format(path, format!("not a readable EXR image ({e})")))?
-        .into_rgba32f();
+    const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+    let bytes = crate::files::read_sniffed(path, crate::files::MAX_FILE_BYTES, |head| {
+        if head.starts_with(&EXR_MAGIC) {
+            Ok(())
+        } else {
+            Err("not an OpenEXR image (it does not start with the EXR magic number)".into())
+        }
+    })
+    .map_err(|e| match e {
+        crate::files::Unread::File(why) => Error::io(path, why),
+        crate::files::Unread::Format(what) => Error::format(path, what),
+    })?;
+    let not_exr =
+        |e: image::ImageError| Error::format(path, format!("not a readable EXR image ({e})"));
+    let reader = || {
+        image::ImageReader::with_format(
+            std::io::Cursor::new(&bytes[..]),
+            image::ImageFormat::OpenExr,
+        )
+    };
+    let (w, h) = reader().into_dimensions().map_err(not_exr)?;
+    let side = crate::camera::MAX_IMAGE_SIDE;
+    if w == 0 || h == 0 || w > side || h > side {
+        return Err(Error::Limit(format!(
+            "{}: its size {w}x{h} is outside 1..={side} pixels a side",
+            path.display()
+        )));
+    }
+    // The decoded RGBA f32 image and the two arrays made of it.
+    let texels = w as u64 * h as u64;
+    crate::limits::check_bytes(
+        || format!("{}: its {w}x{h} pixels", path.display()),
+        texels * 33,
+    )?;
+    let mut reader = reader();
+    let mut lim = image::Limits::default();
+    lim.max_image_width = Some(side);
+    lim.max_image_height = Some(side);
+    lim.max_alloc = Some(texels * 16);
+    reader.limits(lim);
+    let img = reader.decode().map_err(not_exr)?.into_rgba32f();
     let (w, h) = img.dimensions();
     let mut value = Vec::with_capacity((w * h) as usize);
     let mut covered = Vec::with_capacity((w * h) as usize);

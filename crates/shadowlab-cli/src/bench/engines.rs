@@ -446,7 +446,8 @@ fn write_plots(
             &Axis::linear("mean absolute error (visibility, 0–1)"),
             &series,
         )?;
-        std::fs::write(dir.join(format!("engines-{s}-error-vs-memory.svg")), svg)?;
+        let file = dir.join(format!("engines-{s}-error-vs-memory.svg"));
+        crate::output::write_file(&file, svg.as_bytes())?;
         let mid = budgets[budgets.len() / 2];
         let at: Vec<&Row> = rows
             .iter()
@@ -477,7 +478,8 @@ fn write_plots(
             &Axis::linear("mean absolute error (visibility, 0–1)"),
             &points,
         )?;
-        std::fs::write(dir.join(format!("engines-{s}-error-vs-time.svg")), svg)?;
+        let file = dir.join(format!("engines-{s}-error-vs-time.svg"));
+        crate::output::write_file(&file, svg.as_bytes())?;
     }
     Ok(())
 }

@@ -128,16 +128,10 @@ fn check_render_outputs(a: &RenderArgs) -> Result<()> {
             &[],
         ));
     }
-    output::check(&planned, a.force)?;
     if let Some(d) = &a.dump {
-        if d.exists() && !d.is_dir() {
-            return Err(bad_input(format!(
-                "--dump {} exists and is not a folder",
-                d.display()
-            )));
-        }
+        planned.push(Planned::folder(d, "--dump"));
     }
-    Ok(())
+    output::check(&planned, a.force)
 }
 
 /// `shadowlab compare`, validated.
@@ -238,6 +232,9 @@ impl Suite {
     }
 }
 
+/// The most runs per measurement `bench --repeat` takes.
+pub const MAX_REPEAT: usize = 1000;
+
 /// `shadowlab bench`, validated.
 pub struct BenchConfig {
     /// The suite.
@@ -253,7 +250,8 @@ pub struct BenchConfig {
 }
 
 impl BenchConfig {
-    /// Checks the suite's name.
+    /// Checks the suite's name, the number of runs and, before the suite runs, the files
+    /// it will write.
     pub fn from_args(a: &BenchArgs) -> Result<Self> {
         let Some(&(suite, _)) = Suite::ALL.iter().find(|(_, n)| *n == a.suite) else {
             let names: Vec<&str> = Suite::ALL.iter().map(|(_, n)| *n).collect();
@@ -263,6 +261,20 @@ impl BenchConfig {
                 names.join(", ")
             )));
         };
+        if !(1..=MAX_REPEAT).contains(&a.repeat) {
+            return Err(bad_input(format!(
+                "--repeat {} is outside 1..={MAX_REPEAT} (each measurement is the median of that many runs)",
+                a.repeat
+            )));
+        }
+        let mut planned = Vec::new();
+        if let Some(p) = &a.json {
+            planned.push(Planned::new(p, "--json", &["json"]));
+        }
+        if let Some(p) = &a.plots {
+            planned.push(Planned::folder(p, "--plots"));
+        }
+        output::check(&planned, a.force)?;
         Ok(BenchConfig {
             suite,
             json: a.json.clone(),

@@ -17,7 +17,7 @@ pub const MAX_SWEEP_VALUES: usize = 64;
 
 /// The most runs one `compare` may plan (techniques times sweep values): each keeps its
 /// result for the report until the end.
-pub const MAX_RUNS: usize = 128;
+pub use shadowlab::limits::MAX_RUNS;
 
 /// Techniques whose shadow terms are filtered or anti-aliased (soft or fractional at
 /// edges): by default `compare` judges them against a supersampled reference.

@@ -43,32 +43,13 @@ pub struct Setup {
 /// The most frames a sequence may have.
 pub const MAX_FRAMES: usize = 100_000;
 
-/// Bytes a frame holds per pixel whatever the techniques: the camera pass's samples (68),
-/// the rasterizer's depth and id tiles while they are assembled (16), the shaded images
-/// and the animation frame (about 12), and the technique's per-pixel working set (afsm's
-/// samples and lists, the largest, about 32).
-pub const BYTES_PER_PIXEL: u64 = 128;
-
-/// Bytes each result kept until the end of a run holds per pixel: its visibility (16),
-/// with the error image and the comparison's working set in `compare` (16).
-pub const RESULT_BYTES_PER_PIXEL: u64 = 32;
-
 impl Setup {
     /// Refuses an image whose camera pass and `results` kept results (a render keeps one;
     /// compare one per run and the reference's) would need more memory than this process
     /// may use, naming the size and the estimate, before anything is rendered.
     pub fn check_pixel_budget(&self, results: usize) -> Result<()> {
         let (w, h) = (self.camera.width, self.camera.height);
-        let pixels = w as u64 * h as u64;
-        let per = BYTES_PER_PIXEL + RESULT_BYTES_PER_PIXEL * results as u64;
-        shadowlab::limits::check_bytes(
-            || {
-                format!(
-                    "a {w}x{h} image (--width/--height) with {results} result(s) kept: {pixels} pixels"
-                )
-            },
-            pixels.saturating_mul(per),
-        )?;
+        shadowlab::limits::check_frame(w, h, results, "--width/--height")?;
         Ok(())
     }
 
@@ -197,11 +178,12 @@ pub fn resolve(args: &SceneArgs) -> Result<Setup> {
     apply_camera_flags(args, &mut camera)?;
     area_light::check_light_samples(args.light_samples)
         .map_err(|e| bad_input(format!("--light-samples: {e}")))?;
+    // The camera first: the automatic light is chosen from its view.
+    check_camera(args, &scene, &camera)?;
     let (light, area) = resolve_light(args, &scene, &camera)?;
     light
         .validate()
         .with_context(|| format!("the light of {}", args.scene))?;
-    check_camera(args, &scene, &camera)?;
     Ok(Setup {
         scene,
         camera,

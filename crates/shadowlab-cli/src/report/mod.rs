@@ -28,7 +28,7 @@ pub mod rows;
 pub mod tables;
 
 use crate::metrics::Metrics;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use std::path::Path;
 
 /// Writes `DIR/index.html` and its plots in `DIR/plots/` from the metrics of `compare`.
@@ -36,6 +36,5 @@ pub fn write(dir: &Path, metrics: &Metrics) -> Result<()> {
     let plots = plots::draw(dir, &metrics.results)?;
     let dumped = dump::Dumped::find(dir, metrics.dump.as_deref());
     let page = html::page(metrics, &plots, &dumped);
-    let p = dir.join("index.html");
-    std::fs::write(&p, page).with_context(|| format!("cannot write {}", p.display()))
+    crate::output::write_file(&dir.join("index.html"), page.as_bytes())
 }

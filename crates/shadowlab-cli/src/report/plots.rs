@@ -6,7 +6,7 @@ use super::rows::{sweeps, SweepGroup};
 use crate::charts::{self, Axis, Point, Scale, Series};
 use crate::metrics::{FrameFigures, RunResult};
 use crate::output::{create_dir, slug};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use std::path::Path;
 
 /// A plot written to `DIR/plots/`: its file relative to `DIR`, and its caption.
@@ -60,7 +60,7 @@ impl Plots<'_> {
     fn add(&mut self, name: &str, svg: &str, caption: String) -> Result<()> {
         let rel = format!("plots/{name}.svg");
         let path = self.dir.join(&rel);
-        std::fs::write(&path, svg).with_context(|| format!("cannot write {}", path.display()))?;
+        crate::output::write_file(&path, svg.as_bytes())?;
         self.plots.push(Plot { file: rel, caption });
         Ok(())
     }

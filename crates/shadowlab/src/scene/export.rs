@@ -70,8 +70,8 @@ pub fn write_obj(scene: &Scene, path: &Path) -> Result<()> {
         );
         next_vertex += 3;
     }
-    std::fs::write(path, obj).map_err(out_err)?;
-    std::fs::write(&mtl_path, mtl).map_err(|e| Error::Output {
+    crate::files::write_whole(path, obj.as_bytes()).map_err(out_err)?;
+    crate::files::write_whole(&mtl_path, mtl.as_bytes()).map_err(|e| Error::Output {
         path: mtl_path.clone(),
         what: e.to_string(),
     })?;

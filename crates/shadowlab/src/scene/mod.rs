@@ -35,6 +35,7 @@ pub mod obj;
 mod obj_masks;
 pub mod ply;
 mod repeats;
+pub mod texture_cache;
 pub mod toml;
 pub mod up;
 
@@ -84,9 +85,17 @@ pub fn check_triangle_count(path: &Path, triangles: u64) -> Result<()> {
 }
 
 /// The bytes of the scene or mesh file `path`, which must be a regular file of at most
-/// `limit` bytes.
-pub(crate) fn read_input(path: &Path, limit: u64) -> Result<Vec<u8>> {
-    files::read_regular_file(path, limit).map_err(|why| Error::io(path, why))
+/// `limit` bytes whose first bytes `sniff` accepts as its format
+/// ([`files::read_sniffed`]).
+pub(crate) fn read_input(
+    path: &Path,
+    limit: u64,
+    sniff: impl FnOnce(&[u8]) -> std::result::Result<(), String>,
+) -> Result<Vec<u8>> {
+    files::read_sniffed(path, limit, sniff).map_err(|e| match e {
+        files::Unread::File(why) => Error::io(path, why),
+        files::Unread::Format(what) => Error::format(path, what),
+    })
 }
 
 /// The last component of `path` as text (lossily, for a name that is not UTF-8), empty

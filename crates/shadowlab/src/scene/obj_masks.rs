@@ -12,12 +12,12 @@
 //!   names the materials it cut out. An image without alpha (every JPEG) cuts nothing; one
 //!   that cannot be read leaves the material whole, said in a warning, as a glTF texture.
 //!
-//! The images are read through the glTF loader's decoder, within its limits, each once per
-//! file however many materials share it. `d` and `Tr` stay the uniform transmittance they
+//! The images are read through the scene loaders' shared decoder ([`TextureCache`]), within
+//! its limits, each once per file however many materials share it. `d` and `Tr` stay the uniform transmittance they
 //! are without a texture.
 
 use super::alpha_mask::{AlphaMask, AlphaTexture, Wrap};
-use super::gltf::{decode_channel, Channel};
+use super::texture_cache::{Channel, TextureCache};
 use crate::error::{Error, Result};
 use crate::files::{read_regular_file, Access, MAX_FILE_BYTES};
 use std::collections::{BTreeMap, BTreeSet};
@@ -82,6 +82,8 @@ pub(super) struct Masks<'a> {
     kd_alpha: bool,
     /// Decoded images by file and whether a grey image is read as alpha.
     cache: BTreeMap<(PathBuf, bool), Read>,
+    /// The decoder: each distinct image decoded once, their sum within the memory limit.
+    textures: TextureCache,
     /// Materials cut out by their `map_Kd` alpha.
     kd_cut: Vec<String>,
     /// Warnings, one per material and image that could not be used.
@@ -98,6 +100,7 @@ impl<'a> Masks<'a> {
             access,
             kd_alpha,
             cache: BTreeMap::new(),
+            textures: TextureCache::default(),
             kd_cut: Vec::new(),
             notes: Vec::new(),
             ignored: BTreeSet::new(),
@@ -192,7 +195,7 @@ impl<'a> Masks<'a> {
                     format!("the file {} {why}", full.display())
                 }
             })
-            .and_then(|bytes| decode_channel(&bytes, channel));
+            .and_then(|bytes| self.textures.channel(&bytes, channel));
         self.cache.insert(key, r.clone());
         r
     }

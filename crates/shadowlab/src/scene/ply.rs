@@ -76,9 +76,20 @@ impl PropertyAccess for Element {
     }
 }
 
+/// The format check on a PLY file's first bytes: the magic line `ply` (or a start of it,
+/// which the header parser reports as truncated).
+fn sniff(head: &[u8]) -> std::result::Result<(), String> {
+    let magic = |m: &[u8]| head.starts_with(m) || m.starts_with(head);
+    if magic(b"ply\n") || magic(b"ply\r\n") {
+        Ok(())
+    } else {
+        Err("the PLY header is invalid: the file does not start with the line `ply`".into())
+    }
+}
+
 /// Loads a PLY file.
 pub fn load(path: &Path) -> Result<Scene> {
-    let bytes = super::read_input(path, MAX_FILE_BYTES)?;
+    let bytes = super::read_input(path, MAX_FILE_BYTES, sniff)?;
     let fmt = |what: String| Error::format(path, what);
     let parser = Parser::<Element>::new();
     let mut reader = Reader::new(bytes.as_slice());

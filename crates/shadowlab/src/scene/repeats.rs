@@ -8,7 +8,9 @@
 //! copy meets the earlier face at the same depth, and the camera pass's ties already go to
 //! the lower index, so no pixel of any technique or of the reference changes. Repeats of a
 //! semi-transparent or alpha-masked face stay, since each copy filters the light again (or
-//! may carry other texture coordinates).
+//! may carry other texture coordinates). The materials that only dropped copies used go
+//! with them, so a file of 600,000 copies of one shape leaves one shape and one material,
+//! not a material list that every later pass walks.
 
 use super::Scene;
 
@@ -85,7 +87,33 @@ impl Scene {
         self.v2.truncate(w);
         self.material.truncate(w);
         self.uv.truncate(w);
+        self.drop_unused_materials();
         dropped
+    }
+
+    /// Drops the materials no triangle uses, keeping the others in order.
+    fn drop_unused_materials(&mut self) {
+        let mut used = vec![false; self.materials.len()];
+        for &m in &self.material {
+            used[m as usize] = true;
+        }
+        if used.iter().all(|&u| u) {
+            return;
+        }
+        let mut new_index = vec![0u32; used.len()];
+        let mut next = 0u32;
+        for (i, &u) in used.iter().enumerate() {
+            new_index[i] = next;
+            next += u32::from(u);
+        }
+        let mut i = 0;
+        self.materials.retain(|_| {
+            i += 1;
+            used[i - 1]
+        });
+        for m in &mut self.material {
+            *m = new_index[*m as usize];
+        }
     }
 }
 

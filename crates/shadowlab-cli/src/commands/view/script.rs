@@ -48,17 +48,24 @@ pub enum Step {
 /// Reads and checks the script at `path`; its screenshots may replace files only with
 /// `force`.
 pub fn load(path: &Path, force: bool) -> Result<VecDeque<Step>> {
-    let size = std::fs::metadata(path)
-        .map_err(|e| bad_input(format!("cannot read --script {}: {e}", path.display())))?
-        .len();
-    if size > MAX_SCRIPT_BYTES {
-        return Err(bad_input(format!(
-            "--script {} has {size} bytes, more than the {MAX_SCRIPT_BYTES} a script may have",
-            path.display()
-        )));
-    }
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| bad_input(format!("cannot read --script {}: {e}", path.display())))?;
+    let bytes = shadowlab::files::read_sniffed(path, MAX_SCRIPT_BYTES, |h| {
+        shadowlab::files::sniff_text(h, "a script")
+    })
+    .map_err(|e| match e {
+        shadowlab::files::Unread::File(why) => {
+            bad_input(format!("--script {} {why}", path.display()))
+        }
+        shadowlab::files::Unread::Format(what) => {
+            bad_input(format!("--script {}: {what}", path.display()))
+        }
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        bad_input(format!(
+            "--script {} is not UTF-8 text (byte {} is invalid)",
+            path.display(),
+            e.utf8_error().valid_up_to()
+        ))
+    })?;
     let steps = parse(&text).with_context(|| format!("--script {}", path.display()))?;
     let mut planned = Vec::new();
     for s in &steps {

@@ -194,6 +194,19 @@ pub(super) fn check_counts(json: &[u8]) -> std::result::Result<(), String> {
     Ok(())
 }
 
+/// The format check on a glTF file's first bytes: the GLB magic `glTF`, or a JSON
+/// document (after white space and a byte-order mark) opening with `{`.
+pub(super) fn sniff(head: &[u8]) -> std::result::Result<(), String> {
+    if head.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let text = head.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(head);
+    match text.iter().find(|b| !b.is_ascii_whitespace()) {
+        Some(b'{') => Ok(()),
+        _ => Err("not valid glTF JSON (it neither starts with `{` nor is a GLB file)".into()),
+    }
+}
+
 /// The `gltf` crate's validation, less two rules: the `min`/`max` a `POSITION` accessor
 /// must carry (many exporters omit them and the loader never reads them: it computes
 /// bounds itself), and the crate's own list of required extensions (the loader checks
@@ -215,6 +228,13 @@ pub(super) fn validate(root: &gltf::json::Root) -> std::result::Result<(), gltf:
                     )]));
                 }
             }
+        }
+    }
+    // An image needs a `uri` or a `bufferView`; the crate's accessor panics on neither.
+    for (i, image) in root.images.iter().enumerate() {
+        if image.uri.is_none() && image.buffer_view.is_none() {
+            let path = gltf::json::Path(format!("images[{i}].uri or images[{i}].bufferView"));
+            return Err(gltf::Error::Validation(vec![(path, Rule::Missing)]));
         }
     }
     let mut errors = Vec::new();

@@ -73,7 +73,6 @@ mod meshes;
 mod nodes;
 mod textures;
 
-pub(crate) use textures::{decode_channel, Channel};
 
 use super::Scene;
 use crate::error::{Error, Result};
@@ -143,7 +142,7 @@ pub fn load_with_camera(path: &Path, camera_index: usize) -> Result<Scene> {
 /// meets them. An index past the last camera is an error naming how many there are (a
 /// file without cameras accepts only 0, and gets an automatic camera).
 pub fn load_with(path: &Path, access: &Access, camera_index: usize) -> Result<Scene> {
-    let bytes = super::read_input(path, MAX_FILE_BYTES)?;
+    let bytes = super::read_input(path, MAX_FILE_BYTES, document::sniff)?;
     let fmt = |what: String| Error::format(path, what);
     let glb = bytes.starts_with(b"glTF");
     if let (true, Some(v)) = (glb, bytes.get(4..8)) {
@@ -195,6 +194,7 @@ pub fn load_with(path: &Path, access: &Access, camera_index: usize) -> Result<Sc
         light: None,
         skipped: Default::default(),
         textures: Default::default(),
+        texture_cache: Default::default(),
         notes: Vec::new(),
     };
     let planned = loader.walk(true)?;
@@ -329,6 +329,8 @@ struct Loader<'a> {
     skipped: std::collections::BTreeMap<Skip, usize>,
     /// Alpha textures by glTF image index, once read (or why they could not be).
     textures: std::collections::BTreeMap<usize, textures::TextureResult>,
+    /// The decoded images, shared by content and summed against the memory limit.
+    texture_cache: crate::scene::texture_cache::TextureCache,
     /// Sentences for the warnings beyond the counted kinds (an unreadable texture).
     notes: Vec<String>,
 }

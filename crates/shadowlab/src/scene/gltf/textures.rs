@@ -1,16 +1,16 @@
 //! glTF images as alpha textures, for alpha-masked materials: the image's bytes from a
 //! buffer view, a `data:` URI or a file beside the glTF file (where the file's access
-//! allows), its size checked against [`MAX_TEXTURE_SIDE`] and the memory limit before it
-//! is decoded (PNG, GIF; a JPEG has no alpha and is opaque without being decoded), and its
-//! alpha channel kept (255 everywhere for an image without one). The OBJ loader decodes
-//! its `map_d` and `map_Kd` images here too ([`decode_channel`]).
+//! allows), decoded by the load's [`TextureCache`] (once per distinct image, its size
+//! checked against the texture limits and, with every texture decoded before it, the
+//! memory limit; a JPEG has no alpha and is opaque without being decoded), and its alpha
+//! channel kept (255 everywhere for an image without one).
 
 use super::buffers::resolve_uri;
 use super::Loader;
 use crate::files::MAX_FILE_BYTES;
-use crate::limits;
-use crate::scene::alpha_mask::{AlphaTexture, MAX_TEXTURE_SIDE};
-use std::io::Cursor;
+use crate::scene::alpha_mask::AlphaTexture;
+#[cfg(doc)]
+use crate::scene::texture_cache::TextureCache;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -23,7 +23,9 @@ impl Loader<'_> {
         if let Some(t) = self.textures.get(&image.index()) {
             return t.clone();
         }
-        let t = self.read_image(image).and_then(|b| decode_alpha(&b));
+        let t = self
+            .read_image(image)
+            .and_then(|b| self.texture_cache.alpha(&b));
         self.textures.insert(image.index(), t.clone());
         t
     }
@@ -56,81 +58,4 @@ impl Loader<'_> {
             }
         }
     }
-}
-
-/// The alpha channel of an encoded image, refused (with a phrase) when it cannot be
-/// decoded or is larger than the limits allow.
-pub(crate) fn decode_alpha(bytes: &[u8]) -> TextureResult {
-    if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
-        // JPEG carries no alpha: opaque everywhere, whatever its size.
-        return Ok(Arc::new(AlphaTexture {
-            width: 1,
-            height: 1,
-            alpha: vec![255],
-        }));
-    }
-    decode_channel(bytes, Channel::Alpha).map(|t| t.expect("Alpha always gives a texture"))
-}
-
-/// Which channel of an image [`decode_channel`] keeps as the alpha texture.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Channel {
-    /// The alpha channel; 255 everywhere for an image without one.
-    Alpha,
-    /// The alpha channel; `None` (without decoding) for an image without one.
-    AlphaOnly,
-    /// The alpha channel, or for an image without one its grey level (an OBJ `map_d`).
-    AlphaOrGrey,
-}
-
-/// The `channel` of an encoded image as an alpha texture, refused (with a phrase) when it
-/// cannot be decoded or is larger than the limits allow; `None` for [`Channel::AlphaOnly`]
-/// and an image without alpha.
-pub(crate) fn decode_channel(
-    bytes: &[u8],
-    channel: Channel,
-) -> std::result::Result<Option<Arc<AlphaTexture>>, String> {
-    let reader = image::ImageReader::new(Cursor::new(bytes))
-        .with_guessed_format()
-        .map_err(|e| format!("its format cannot be read ({e})"))?;
-    let decoder = reader
-        .into_decoder()
-        .map_err(|e| format!("it cannot be decoded ({e})"))?;
-    let (w, h) = image::ImageDecoder::dimensions(&decoder);
-    let has_alpha = image::ImageDecoder::color_type(&decoder).has_alpha();
-    drop(decoder);
-    if w == 0 || h == 0 || w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE {
-        return Err(format!(
-            "its size {w}x{h} is outside 1..={MAX_TEXTURE_SIDE} texels a side"
-        ));
-    }
-    if channel == Channel::AlphaOnly && !has_alpha {
-        return Ok(None);
-    }
-    // The decoder's RGBA buffer (up to 16 bytes a texel) and the kept alpha.
-    let estimate = w as u64 * h as u64 * 17;
-    limits::check_bytes(|| format!("its {w}x{h} texels"), estimate).map_err(|e| e.to_string())?;
-    let mut reader = image::ImageReader::new(Cursor::new(bytes))
-        .with_guessed_format()
-        .map_err(|e| format!("its format cannot be read ({e})"))?;
-    let mut lim = image::Limits::default();
-    lim.max_image_width = Some(MAX_TEXTURE_SIDE);
-    lim.max_image_height = Some(MAX_TEXTURE_SIDE);
-    lim.max_alloc = Some(estimate);
-    reader.limits(lim);
-    let img = reader
-        .decode()
-        .map_err(|e| format!("it cannot be decoded ({e})"))?;
-    let alpha = if has_alpha {
-        img.to_rgba8().pixels().map(|p| p.0[3]).collect()
-    } else if channel == Channel::AlphaOrGrey {
-        img.to_luma8().into_raw()
-    } else {
-        vec![255; w as usize * h as usize]
-    };
-    Ok(Some(Arc::new(AlphaTexture {
-        width: w,
-        height: h,
-        alpha,
-    })))
 }

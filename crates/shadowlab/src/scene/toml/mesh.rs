@@ -161,10 +161,10 @@ fn transform(spec: &MeshSpec) -> Msg<Mat4> {
         }
         (None, Some(axis), Some(angle)) => {
             let axis = finite3(axis, "rotate_axis")?;
-            if axis.length_squared() == 0.0 || !angle.is_finite() {
+            let (Some(axis), true) = (crate::math::direction(axis), angle.is_finite()) else {
                 return Err("`rotate_axis` must be non-zero and `rotate_angle_deg` finite".into());
-            }
-            Quat::from_axis_angle(axis.normalize(), angle.to_radians())
+            };
+            Quat::from_axis_angle(axis, angle.to_radians())
         }
         (None, Some(_), None) | (None, None, Some(_)) => {
             return Err("`rotate_axis` and `rotate_angle_deg` go together".into())
