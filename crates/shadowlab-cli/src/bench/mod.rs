@@ -7,6 +7,7 @@ pub mod afsm_scaling;
 pub mod asm_walkthrough;
 pub mod csm_table;
 pub mod engines;
+pub mod gpu;
 pub mod psm_lights;
 pub mod soft_exact;
 pub mod subpixel_scaling;

@@ -1,0 +1,44 @@
+//! The `gpu:` techniques: one folder per technique, mirroring the library's technique
+//! folders, and the registry that creates them by name.
+
+pub mod raytrace;
+pub mod shadow_map;
+
+use shadowlab::error::{Error, Result};
+use shadowlab::techniques::{find_param, ShadowTechnique};
+
+/// Every GPU technique's name, in the order reports list them.
+pub const ALL: &[&str] = &[shadow_map::SM, shadow_map::PCF, raytrace::NAME];
+
+/// A GPU technique by name (`gpu:raytrace`, …), with the defaults of its CPU twin.
+pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
+    Ok(match name {
+        shadow_map::SM => Box::new(shadow_map::GpuShadowMap::standard()),
+        shadow_map::PCF => Box::new(shadow_map::GpuShadowMap::pcf()),
+        raytrace::NAME => Box::new(raytrace::GpuRayTrace::default()),
+        _ => {
+            return Err(Error::param(format!(
+                "unknown GPU technique {name:?}: the GPU techniques are {}",
+                ALL.join(", ")
+            )))
+        }
+    })
+}
+
+/// Sets parameter `key` of a GPU technique `name` on its CPU twin, whose table it shares;
+/// errors name the GPU technique.
+pub(crate) fn set_twin_param(
+    name: &str,
+    twin: &mut dyn ShadowTechnique,
+    key: &str,
+    value: &str,
+) -> Result<()> {
+    find_param(name, &twin.param_specs(), key)?;
+    twin.set_param(key, value).map_err(|e| match e {
+        Error::Param(m) => Error::Param(m.replace(
+            &format!("parameter {}.", twin.name()),
+            &format!("parameter {name}."),
+        )),
+        e => e,
+    })
+}
