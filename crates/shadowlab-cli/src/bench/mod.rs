@@ -4,6 +4,7 @@
 //! several runs in milliseconds. `commands::bench` runs them.
 
 pub mod afsm_scaling;
+pub mod afsm_scaling_gpu;
 pub mod asm_walkthrough;
 pub mod csm_table;
 pub mod engines;
