@@ -5,15 +5,22 @@
 mod support;
 
 use std::process::Command;
-use support::{metrics, quiet, refused, run_ok, tmp, Capture};
+use support::{metrics, quiet, refused, run_ok, shadowlab, tmp, Capture};
 
-/// `shadowlab --quiet` with a private runtime folder, so the Vulkan loader's window-system
-/// probes print nothing.
-fn gpu_quiet(dir: &std::path::Path) -> Command {
+/// `shadowlab` with a private runtime folder, so the Vulkan loader's window-system probes
+/// print nothing.
+fn gpu_run(dir: &std::path::Path) -> Command {
     let runtime = dir.join("runtime");
     std::fs::create_dir_all(&runtime).unwrap();
-    let mut c = quiet();
+    let mut c = shadowlab();
     c.env("XDG_RUNTIME_DIR", &runtime);
+    c
+}
+
+/// [`gpu_run`] with `--quiet`.
+fn gpu_quiet(dir: &std::path::Path) -> Command {
+    let mut c = gpu_run(dir);
+    c.arg("--quiet");
     c
 }
 
@@ -56,8 +63,9 @@ fn compare_puts_cpu_and_gpu_side_by_side_with_the_adapter() {
         return;
     }
     let out = dir.join("report");
+    // Not quiet: the table's line naming the adapter is checked.
     let r = run_ok(
-        gpu_quiet(&dir)
+        gpu_run(&dir)
             .args([
                 "compare",
                 "--scene",
