@@ -19,8 +19,10 @@
 //! ```text
 //! device.rs                 adapter choice (--adapter / SHADOWLAB_ADAPTER), limits, faults
 //! transfer.rs               buffers up and down, timestamp queries
+//! twin.rs                   a GPU technique's parameters are its CPU twin's
 //! compute.rs                pipelines and bind groups by binding number, read-back to RGB
 //! upload.rs                 scene (per revision), BVH, view samples -> GPU buffers
+//! camera_pass/              the GPU G-buffer (benchmarks, the viewer): gbuffer.wgsl
 //! shader.rs                 the include step composing shaders/common/*.wgsl into stages
 //! shaders/common/*.wgsl     written once: watertight test, ray offset, light, alpha masks
 //! techniques/<name>/        one folder per technique, mirroring the library's:
@@ -30,9 +32,9 @@
 //!
 //! Adding a technique: make `techniques/<name>/mod.rs` with a type implementing
 //! `ShadowTechnique` whose `name()` is `gpu:<name>` and whose parameters are its CPU
-//! twin's (reuse the twin's `params`/`param_specs`, and `set_twin_param`), its stages as
-//! `<stage>.wgsl` beside it composed through [`shader::Stage`] with the common files they
-//! need; then add one line to the registry in [`techniques::create`] and its name to
+//! twin's (reuse the twin's `params`/`param_specs`, and [`twin::set_twin_param`]), its
+//! stages as `<stage>.wgsl` beside it composed through [`shader::Stage`] with the common
+//! files they need, pipelines from [`compute::pipeline`] (made once per device); then add one line to the registry in [`techniques::create`] and its name to
 //! [`techniques::ALL`]. Run each stage's GPU work inside [`device::Gpu::stage`] (faults
 //! then name the technique and the stage), time passes with [`transfer::Timer`], check
 //! sizes against the adapter with [`device::Gpu::check_binding`] /
@@ -47,11 +49,13 @@
 
 #![forbid(unsafe_code)]
 
+pub mod camera_pass;
 pub mod compute;
 pub mod device;
 pub mod shader;
 pub mod techniques;
 pub mod transfer;
+pub mod twin;
 pub mod upload;
 
 /// Makes the library's technique registry create the `gpu:` techniques.

@@ -6,7 +6,7 @@ pub mod raytrace;
 pub mod shadow_map;
 
 use shadowlab::error::{Error, Result};
-use shadowlab::techniques::{find_param, ShadowTechnique};
+use shadowlab::techniques::ShadowTechnique;
 
 /// Every GPU technique's name, in the order reports list them.
 pub const ALL: &[&str] = &[
@@ -29,23 +29,5 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
                 ALL.join(", ")
             )))
         }
-    })
-}
-
-/// Sets parameter `key` of a GPU technique `name` on its CPU twin, whose table it shares;
-/// errors name the GPU technique.
-pub(crate) fn set_twin_param(
-    name: &str,
-    twin: &mut dyn ShadowTechnique,
-    key: &str,
-    value: &str,
-) -> Result<()> {
-    find_param(name, &twin.param_specs(), key)?;
-    twin.set_param(key, value).map_err(|e| match e {
-        Error::Param(m) => Error::Param(m.replace(
-            &format!("parameter {}.", twin.name()),
-            &format!("parameter {name}."),
-        )),
-        e => e,
     })
 }

@@ -124,7 +124,7 @@ impl ShadowTechnique for GpuRayTrace {
     }
 
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
-        super::set_twin_param(NAME, &mut self.cpu, key, value)
+        crate::twin::set_twin_param(NAME, &mut self.cpu, key, value)
     }
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {

@@ -223,7 +223,7 @@ impl ShadowTechnique for GpuShadowMap {
     }
 
     fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
-        super::set_twin_param(self.name, &mut self.cpu, key, value)
+        crate::twin::set_twin_param(self.name, &mut self.cpu, key, value)
     }
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
