@@ -361,7 +361,7 @@ impl Table<'_> {
         self.line("gpu:afsm / gpu:raytrace (GPU)", &|c| {
             gpu(c, &|g| format!("{:.2}", g.afsm.gpu_ms / g.raytrace.gpu_ms))
         });
-        self.line("gpu:afsm mismatch vs gpu:raytrace", &|c| {
+        self.line("gpu:afsm/raytrace mismatch", &|c| {
             gpu(c, &|g| format!("{:.5}%", g.mismatch_rate * 100.0))
         });
     }

@@ -1,4 +1,5 @@
-//! `--dump` images of `gpu:afsm`: each light plane's grid, one pixel a cell — its load
+//! `--dump` images of `gpu:afsm`: each light plane's grid, one square a cell (at least
+//! [`DUMP_SIDE`] pixels along the longer side) — its load
 //! (samples a cell, grey, white the fullest) and its occlusion culling (red where some
 //! triangle skipped a chunk of the cell because all its samples were dark, brighter the
 //! more often, over the load in grey).
@@ -50,6 +51,19 @@ pub(super) fn plane_grids(
         .collect()
 }
 
+/// The fewest pixels along a picture's longer side.
+const DUMP_SIDE: u32 = 512;
+
+/// A picture of the grid, each cell `colour(i)` (cell `i` row-major) in a square of pixels.
+fn picture(g: &PlaneGrid, colour: impl Fn(usize) -> [u8; 3]) -> RgbImage {
+    let k = (DUMP_SIDE / g.gx.max(g.gy).max(1)).max(1);
+    let mut img = RgbImage::new(g.gx * k, g.gy * k);
+    for (x, y, p) in img.enumerate_pixels_mut() {
+        p.0 = colour(((y / k) * g.gx + x / k) as usize);
+    }
+    img
+}
+
 fn scale(v: &[u32]) -> f32 {
     v.iter().copied().max().unwrap_or(0).max(1) as f32
 }
@@ -57,31 +71,23 @@ fn scale(v: &[u32]) -> f32 {
 /// The grid's load, grey.
 pub(super) fn load_picture(g: &PlaneGrid) -> RgbImage {
     let m = scale(&g.load);
-    let mut img = RgbImage::new(g.gx, g.gy);
-    for (i, &l) in g.load.iter().enumerate() {
-        let v = (l as f32 / m * 255.0).round() as u8;
-        img.get_pixel_mut(i as u32 % g.gx, i as u32 / g.gx).0 = [v, v, v];
-    }
-    img
+    picture(g, |i| {
+        let v = (g.load[i] as f32 / m * 255.0).round() as u8;
+        [v, v, v]
+    })
 }
 
 /// The culled cells in red over the load.
 pub(super) fn culled_picture(g: &PlaneGrid) -> RgbImage {
     let m = scale(&g.load);
     let c = scale(&g.culled);
-    let mut img = RgbImage::new(g.gx, g.gy);
-    for i in 0..g.load.len() {
+    picture(g, |i| {
         let grey = (g.load[i] as f32 / m * 96.0).round() as u8;
-        let px = if g.culled[i] > 0 {
-            [
-                (128.0 + g.culled[i] as f32 / c * 127.0).round() as u8,
-                grey / 2,
-                grey / 2,
-            ]
+        if g.culled[i] > 0 {
+            let red = (128.0 + g.culled[i] as f32 / c * 127.0).round() as u8;
+            [red, grey / 2, grey / 2]
         } else {
             [grey, grey, grey]
-        };
-        img.get_pixel_mut(i as u32 % g.gx, i as u32 / g.gx).0 = px;
-    }
-    img
+        }
+    })
 }
