@@ -28,7 +28,8 @@
 //!   triangles' shares and two binary searches find both), so a large triangle spreads
 //!   over as many threads as it has chunks under it and a dense cell over as many chunks as
 //!   it has runs of `leaf-size` samples: no thread takes a whole large triangle or a whole
-//!   dense cell. The paper's occlusion culling: a chunk whose samples are all dark, or all
+//!   dense cell (a triangle over at most 8 chunks is one item that visits them in turn,
+//!   one search instead of one a chunk). The paper's occlusion culling: a chunk whose samples are all dark, or all
 //!   in front of the triangle (its greatest depth below the triangle's least), or outside
 //!   the footprint, is skipped whole; in the others each live sample inside the footprint
 //!   takes the watertight test of `shaders/common/watertight.wgsl` on its own ray (own
@@ -69,7 +70,7 @@
 //!   empty); area lights shade with their punctual stand-in, as the CPU `afsm` does.
 //!
 //! Counters: `samples` (lit samples binned), `light_planes`, `cells`,
-//! `work_items` (triangle–chunk pairs), `cells_visited` (pairs whose samples were looped
+//! `work_items` (the work queue's items), `cells_visited` (pairs whose samples were looped
 //! over), `cells_occlusion_culled` (pairs skipped because every sample was dark),
 //! `cells_depth_culled` (every sample in front of the triangle), `samples_tested` (samples
 //! not yet dark in the chunks visited), `ray_tests` (samples under a footprint that took

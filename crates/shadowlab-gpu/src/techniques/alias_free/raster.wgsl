@@ -33,6 +33,8 @@ const BIG: f32 = 3.0e38;
 // Words a record holds: three edge functions, the rectangle, the least depth, the cell
 // rectangle (two words of two 16-bit ends), the plane and the triangle.
 const RECORD_STRIDE: u32 = 18u;
+// A record over at most this many chunks is one work item.
+const SMALL_RECORD: u32 = 8u;
 
 struct Foot {
     ok: bool,
@@ -280,9 +282,12 @@ fn setup(@builtin(global_invocation_id) gid: vec3<u32>) {
     records[o + 13u] = bitcast<u32>(f.zmin);
     records[o + 14u] = c0 | (c1 << 16u);
     records[o + 15u] = r0 | (r1 << 16u);
-    records[o + 16u] = pl;
+    // A triangle over few chunks is one work item that visits them in turn (one search
+    // for its record instead of one a chunk); a larger one is an item a chunk.
+    let small = count > 0u && count <= SMALL_RECORD;
+    records[o + 16u] = pl | select(0u, 0x80000000u, small);
     records[o + 17u] = tri;
-    items[rec] = count;
+    items[rec] = select(count, 1u, small);
 }
 
 // One thread: the test's indirect dispatch for this batch's work items, 64 a workgroup,

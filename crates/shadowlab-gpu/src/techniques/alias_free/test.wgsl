@@ -118,7 +118,8 @@ fn rec_f(o: u32) -> f32 {
     return bitcast<f32>(records[o]);
 }
 
-// Work item `j`: the triangle of its record against one chunk of one cell.
+// Work item `j`: the triangle of its record against one chunk of one cell, or, for a
+// record marked small, against every chunk under its rectangle in turn.
 fn item(j: u32, acc: ptr<function, Local>) {
     let n_rec = params.tri_count * params.n_planes;
     var lo = 0u;
@@ -140,10 +141,22 @@ fn item(j: u32, acc: ptr<function, Local>) {
     let c1 = cc >> 16u;
     let r0 = rr & 0xffffu;
     let r1 = rr >> 16u;
-    let pl = records[o + 16u];
+    let pl = records[o + 16u] & 0x7fffffffu;
+    let small = (records[o + 16u] >> 31u) != 0u;
     let tri = records[o + 17u];
     let b = pl * PLANE_STRIDE;
     let gx = planes[b + PL_GX];
+    let base = planes[b + PL_CELL_BASE];
+    if small {
+        for (var r = r0; r <= r1; r++) {
+            let first = chunk_start[base + r * gx + c0];
+            let end = chunk_start[base + r * gx + c1 + 1u];
+            for (var chunk = first; chunk < end; chunk++) {
+                chunk_test(o, tri, chunk, acc);
+            }
+        }
+        return;
+    }
     let sb = planes[b + PL_SAT_BASE];
     let base0 = sat_at(sb, gx, r0, c1 + 1u) - sat_at(sb, gx, r0, c0);
     // The row: the first whose rows up to it hold more than `jr` chunks.
@@ -160,8 +173,11 @@ fn item(j: u32, acc: ptr<function, Local>) {
     }
     let row = ra;
     let before = (sat_at(sb, gx, row, c1 + 1u) - sat_at(sb, gx, row, c0)) - base0;
-    let chunk = chunk_start[planes[b + PL_CELL_BASE] + row * gx + c0] + (jr - before);
+    chunk_test(o, tri, chunk_start[base + row * gx + c0] + (jr - before), acc);
+}
 
+// The triangle of the record at `o` (triangle `tri`) against chunk `chunk`.
+fn chunk_test(o: u32, tri: u32, chunk: u32, acc: ptr<function, Local>) {
     let ch = chunk * CHUNK_STRIDE;
     let zmin = rec_f(o + 13u);
     if zmin > bitcast<f32>(chunks[ch + 6u]) {
