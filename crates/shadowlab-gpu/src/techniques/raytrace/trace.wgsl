@@ -127,9 +127,87 @@ fn first_hit(o: vec3<f32>, dir: vec3<f32>, t_max: f32, own: u32, after: i32, any
     return best;
 }
 
+// Semi-transparent casters gathered by one traversal: the GATHER lowest triangle indices
+// above `after` met along the segment, in increasing order, or `opaque` when an opaque
+// caster is met (the answer is then 0 whatever else lies on the segment).
+const GATHER: u32 = 16u;
+
+struct Gathered {
+    opaque: bool,
+    count: u32,
+    tri: array<u32, GATHER>,
+}
+
+fn gather(o: vec3<f32>, dir: vec3<f32>, t_max: f32, own: u32, after: i32) -> Gathered {
+    let sh = shear_of(dir);
+    let tiny = select(vec3<f32>(-TINY_DIR), vec3<f32>(TINY_DIR), dir >= vec3<f32>(0.0));
+    let safe = select(dir, tiny, abs(dir) < vec3<f32>(TINY_DIR));
+    let inv = 1.0 / safe;
+    var g: Gathered;
+    g.opaque = false;
+    g.count = 0u;
+    var stack: array<u32, STACK>;
+    var top = 1u;
+    stack[0] = 0u;
+    while top > 0u {
+        top -= 1u;
+        let node = stack[top];
+        for (var c = 0u; c < 8u; c++) {
+            let ch = children[node * 8u + c];
+            if ch.kind == 0u {
+                continue;
+            }
+            let t0 = (ch.lo - o) * inv;
+            let t1 = (ch.hi - o) * inv;
+            let tmin = min(t0, t1);
+            let tmax = max(t0, t1);
+            let near = max(max(tmin.x, tmin.y), tmin.z);
+            let far = min(min(tmax.x, tmax.y), tmax.z) * SLAB_STRETCH;
+            if !(near <= far && far >= 0.0 && near <= t_max) {
+                continue;
+            }
+            if ch.kind == 1u {
+                if top < STACK {
+                    stack[top] = ch.index;
+                    top += 1u;
+                }
+                continue;
+            }
+            let count = ch.kind >> 2u;
+            for (var k = 0u; k < count; k++) {
+                let tri = prims[ch.index + k];
+                if tri == own || i32(tri) <= after {
+                    continue;
+                }
+                // Full, and above every index kept: not among the lowest.
+                if g.count == GATHER && tri >= g.tri[GATHER - 1u] {
+                    continue;
+                }
+                let h = intersect_sheared(o, sh, 0.0, t_max, vertex(tri, 0u), vertex(tri, 1u), vertex(tri, 2u));
+                if !h.ok || cut_out(tri, h.b) {
+                    continue;
+                }
+                if materials[tri_material[tri]].opaque != 0u {
+                    g.opaque = true;
+                    return g;
+                }
+                // Insert in order (a triangle is met once: it lies in one leaf).
+                var i = min(g.count, GATHER - 1u);
+                while i > 0u && g.tri[i - 1u] > tri {
+                    g.tri[i] = g.tri[i - 1u];
+                    i -= 1u;
+                }
+                g.tri[i] = tri;
+                g.count = min(g.count + 1u, GATHER);
+            }
+        }
+    }
+    return g;
+}
+
 // The library's `Reference::occlusion`: 0 behind any opaque caster, else the product of
-// the transmittances met, taken in triangle-index order (one traversal per caster met,
-// each finding the next index), so the bits do not depend on the traversal order.
+// the transmittances met, taken in triangle-index order (each traversal gathers the next
+// GATHER indices), so the bits do not depend on the traversal order.
 fn occlusion(o: vec3<f32>, dir: vec3<f32>, t_max: f32, own: u32) -> vec3<f32> {
     if params.transparency == 0u {
         if first_hit(o, dir, t_max, own, -1, true) == NO_TRIANGLE {
@@ -140,16 +218,17 @@ fn occlusion(o: vec3<f32>, dir: vec3<f32>, t_max: f32, own: u32) -> vec3<f32> {
     var t = vec3<f32>(1.0);
     var after = -1;
     loop {
-        let tri = first_hit(o, dir, t_max, own, after, false);
-        if tri == NO_TRIANGLE {
-            break;
-        }
-        let m = materials[tri_material[tri]];
-        if m.opaque != 0u {
+        let g = gather(o, dir, t_max, own, after);
+        if g.opaque {
             return vec3<f32>(0.0);
         }
-        t *= m.transmittance;
-        after = i32(tri);
+        for (var i = 0u; i < g.count; i++) {
+            t *= materials[tri_material[g.tri[i]]].transmittance;
+        }
+        if g.count < GATHER {
+            break;
+        }
+        after = i32(g.tri[GATHER - 1u]);
     }
     return t;
 }
