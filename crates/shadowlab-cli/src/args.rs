@@ -19,6 +19,10 @@ pub struct Cli {
     /// No progress bars or status lines.
     #[arg(long, global = true)]
     pub quiet: bool,
+    /// The GPU adapter for `gpu:` techniques: a substring of its name (default: the
+    /// `SHADOWLAB_ADAPTER` variable, else the first hardware adapter, else a software one).
+    #[arg(long, global = true, value_name = "NAME")]
+    pub adapter: Option<String>,
     #[command(subcommand)]
     pub command: Option<Command>,
 }

@@ -41,6 +41,11 @@ fn main() -> ExitCode {
         Err(e) => return usage_error(e),
     };
     progress::set_quiet(cli.quiet);
+    // The `gpu:` techniques, created by name wherever a technique is named.
+    shadowlab_gpu::register();
+    if let Some(name) = &cli.adapter {
+        shadowlab_gpu::device::choose_adapter(name);
+    }
     match failure::catch_panics(|| run(cli)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

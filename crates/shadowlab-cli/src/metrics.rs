@@ -67,6 +67,10 @@ pub struct Figures {
     pub memory_bytes: u64,
     /// The technique's counters.
     pub counters: BTreeMap<String, f64>,
+    /// The GPU adapter a `gpu:` technique ran on (name, backend, type, driver; a software
+    /// adapter's times marked CPU-emulated); absent on the CPU.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub device: Option<String>,
 }
 
 impl Figures {
@@ -77,6 +81,7 @@ impl Figures {
             stages_ms: StageTimes(stats.stages_ms.clone()),
             memory_bytes: stats.memory_bytes,
             counters: stats.counters.clone(),
+            device: stats.device.clone(),
         }
     }
 }
@@ -535,6 +540,7 @@ mod tests {
                 stages_ms: StageTimes(vec![("shadow_map".into(), 1.0), ("lookup".into(), 0.25)]),
                 memory_bytes: 1 << 20,
                 counters: BTreeMap::from([("texels".into(), 262144.0)]),
+                device: None,
             },
             mismatch_rate: 0.01,
             mean_abs_error: 0.002,

@@ -367,6 +367,8 @@ fn read_exr<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'p
 
 #[pymodule]
 fn _shadowlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // The `gpu:` techniques, created by name like the library's own.
+    shadowlab_gpu::register();
     m.add_class::<PyCamera>()?;
     m.add_class::<PyLight>()?;
     m.add_class::<scene::PyScene>()?;

@@ -77,6 +77,25 @@ def test_equal_to_the_cli_exr(tmp_path):
         assert 0.0 < cli[..., 3].mean() <= 1.0
 
 
+def test_gpu_techniques_are_named_like_the_others():
+    # gpu:raytrace traces the reference's own rays on the GPU: equal to raytrace on every
+    # pixel. Without a GPU adapter (none installed) it is skipped, except under CI.
+    scene = box_scene()
+    try:
+        img = scene.render("gpu:raytrace", CAMERA, SUN)
+    except sl.ShadowlabError as e:
+        if "no GPU adapter" in str(e) and os.environ.get("CI") != "true":
+            pytest.skip(str(e))
+        raise
+    assert np.array_equal(img, scene.render("raytrace", CAMERA, SUN))
+    sm = scene.render("gpu:sm", CAMERA, SUN, params={"resolution": 1024})
+    cpu = scene.render("sm", CAMERA, SUN, params={"resolution": 1024})
+    assert sm.shape == cpu.shape == (72, 96, 3)
+    assert (sm != cpu).any(axis=2).mean() < 0.01
+    with pytest.raises(sl.ShadowlabError, match="gpu:sm"):
+        scene.render("gpu:sm", CAMERA, SUN, params={"no-such-key": 1})
+
+
 def test_nan_vertices_raise_the_library_sentence():
     g, gf, _, _ = ground_and_box()
     g[2, 1] = np.nan

@@ -330,6 +330,21 @@ pub struct RayGenerator {
 }
 
 impl RayGenerator {
+    /// The generator's parts, for a backend that forms the same rays elsewhere (the GPU
+    /// crate): eye, forward axis, right and upper half-extents, 1/width, 1/height, and
+    /// whether the rays are parallel (orthographic).
+    pub fn parts(&self) -> (Vec3, Vec3, Vec3, Vec3, f32, f32, bool) {
+        (
+            self.eye,
+            self.forward,
+            self.right,
+            self.up,
+            self.inv_width,
+            self.inv_height,
+            self.parallel,
+        )
+    }
+
     /// The image position `(x, y)` in normalized device coordinates.
     #[inline]
     fn ndc(&self, x: f32, y: f32) -> (f32, f32) {

@@ -290,6 +290,9 @@ pub struct Stats {
     pub memory_bytes: u64,
     /// Named counters (nodes visited, texels, evaluations, …).
     pub counters: BTreeMap<String, f64>,
+    /// The device a GPU technique ran on, as one line (adapter name, backend, device type,
+    /// driver; a software adapter marked `CPU-emulated`); `None` on the CPU.
+    pub device: Option<String>,
 }
 
 impl Stats {

@@ -98,6 +98,17 @@ impl<'s> Reference<'s> {
         }
     }
 
+    /// The wide BVH, in coordinates [`Reference::bvh_scale`] times the scene's (for
+    /// backends that trace the same tree elsewhere, such as the GPU crate).
+    pub fn bvh(&self) -> &CwBvh {
+        &self.bvh
+    }
+
+    /// The power of two the BVH's coordinates are the scene's times.
+    pub fn bvh_scale(&self) -> f32 {
+        self.bvh_scale
+    }
+
     /// Bytes held by the BVH.
     pub fn memory_bytes(&self) -> usize {
         self.bvh.nodes.len() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()

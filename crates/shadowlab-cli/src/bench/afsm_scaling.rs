@@ -5,6 +5,11 @@
 //! feature `embree`, Intel Embree 3's BVH build and occlusion rays (`rtcOccluded1`) over the
 //! same scene and samples are timed too, with their agreement with the reference.
 //!
+//! With a GPU adapter, `gpu:afsm` and `gpu:raytrace` are timed on the same scene at
+//! 1920×1080 (`--quick`: 480×270) too (see
+//! [`super::afsm_scaling_gpu`]), with the target that `gpu:afsm`'s GPU time is at most
+//! `gpu:raytrace`'s at every size.
+//!
 //! `afsm` times are the technique's own frame (transform, BSP, rasterization); the camera
 //! pass, shared by every technique, is excluded, as the paper's table excludes it. Each
 //! figure is the median of `--repeat` runs after one untimed warm-up frame. The paper ran on
@@ -12,6 +17,7 @@
 //! its total at every size, and no slower than Embree tracing the same shadow rays through
 //! its prebuilt BVH at every size (the trace alone; measured when built with `embree`).
 
+use super::afsm_scaling_gpu::{self as gpu, GpuTimes};
 use super::{verdict, BenchReport};
 use crate::config::BenchConfig;
 use anyhow::{Context, Result};
@@ -79,6 +85,7 @@ struct Column {
     covered: usize,
     last: Shadows,
     embree: Option<EmbreeTimes>,
+    gpu: Option<GpuTimes>,
 }
 
 /// Intel Embree's BVH build and occlusion rays over the same scene and samples.
@@ -127,7 +134,7 @@ fn measure_embree(
     Ok(None)
 }
 
-fn measure(count: usize, repeat: usize) -> Result<Column> {
+fn measure(count: usize, repeat: usize, quick: bool) -> Result<Column> {
     let params = BTreeMap::from([("count".to_string(), count.to_string())]);
     let scene = shadowlab::scene::load("random-triangles", &params)
         .context("generating random-triangles")?;
@@ -170,6 +177,7 @@ fn measure(count: usize, repeat: usize) -> Result<Column> {
     let truth = truth.expect("at least one trace");
     let m = compare(&view, &last.visibility, &truth);
     let embree = measure_embree(&scene, &frame, &truth, repeat)?;
+    let gpu = gpu::measure(&scene, &camera, &light, repeat, quick);
     Ok(Column {
         triangles: count,
         afsm_ms,
@@ -182,6 +190,7 @@ fn measure(count: usize, repeat: usize) -> Result<Column> {
         covered: m.covered_pixels,
         last,
         embree,
+        gpu,
     })
 }
 
@@ -191,7 +200,7 @@ pub fn run(a: &BenchConfig) -> Result<BenchReport> {
     let mut cols = Vec::new();
     for &n in &COUNTS {
         let p = crate::progress::step(format!("afsm-scaling: {} triangles", short(n as f64)));
-        cols.push(measure(n, repeat)?);
+        cols.push(measure(n, repeat, a.quick)?);
         p.finish_and_clear();
     }
     println!(
@@ -199,11 +208,15 @@ pub fn run(a: &BenchConfig) -> Result<BenchReport> {
         rayon::current_num_threads(),
         repeat
     );
-    let table = Table { cols: &cols };
+    let table = Table {
+        cols: &cols,
+        quick: a.quick,
+    };
     table.head();
     table.paper_rows();
     table.reference_rows();
     table.embree_rows();
+    table.gpu_rows();
     table.footer_rows();
     print_targets(&cols);
     Ok(BenchReport {
@@ -223,6 +236,7 @@ fn ms(x: f64) -> String {
 /// The printed table: a line per measure, a pair of cells (paper, ours) per column.
 struct Table<'c> {
     cols: &'c [Column],
+    quick: bool,
 }
 
 impl Table<'_> {
@@ -324,6 +338,34 @@ impl Table<'_> {
         });
     }
 
+    /// The GPU techniques' times, when an adapter was there.
+    fn gpu_rows(&self) {
+        let Some(adapter) = self.cols.iter().find_map(|c| c.gpu.as_ref()) else {
+            return;
+        };
+        let (w, h) = gpu::size(self.quick);
+        println!("GPU rows at {w}x{h}: {}", adapter.adapter);
+        let gpu = |c: &Column, f: &dyn Fn(&GpuTimes) -> String| {
+            ("-".to_string(), c.gpu.as_ref().map_or("-".into(), f))
+        };
+        self.line("gpu:afsm ms (wall)", &|c| gpu(c, &|g| ms(g.afsm.wall_ms)));
+        self.line("gpu:afsm ms (GPU)", &|c| {
+            gpu(c, &|g| format!("{:.2}", g.afsm.gpu_ms))
+        });
+        self.line("gpu:raytrace ms (wall)", &|c| {
+            gpu(c, &|g| ms(g.raytrace.wall_ms))
+        });
+        self.line("gpu:raytrace ms (GPU)", &|c| {
+            gpu(c, &|g| format!("{:.2}", g.raytrace.gpu_ms))
+        });
+        self.line("gpu:afsm / gpu:raytrace (GPU)", &|c| {
+            gpu(c, &|g| format!("{:.2}", g.afsm.gpu_ms / g.raytrace.gpu_ms))
+        });
+        self.line("gpu:afsm/raytrace mismatch", &|c| {
+            gpu(c, &|g| format!("{:.5}%", g.mismatch_rate * 100.0))
+        });
+    }
+
     /// Mismatch and memory, and whether Embree was timed.
     fn footer_rows(&self) {
         self.line("Mismatch vs reference", &|c| {
@@ -364,6 +406,9 @@ fn print_targets(cols: &[Column]) {
             ),
             None => "afsm vs Embree trace: not measured (build with `--features embree`)".into(),
         });
+        if let Some(g) = &c.gpu {
+            notes.push(gpu::target(g));
+        }
         notes.push(format!(
             "vs reference trace {:.1} ms: {:.2}x",
             c.trace_ms,
@@ -409,5 +454,11 @@ fn row(c: &Column) -> serde_json::Value {
         "covered_pixels": c.covered,
         "mismatch_rate": c.mismatch_rate,
         "memory_bytes": c.last.stats.memory_bytes,
+        "gpu_adapter": c.gpu.as_ref().map(|g| g.adapter.clone()),
+        "gpu_afsm_wall_ms": c.gpu.as_ref().map(|g| g.afsm.wall_ms),
+        "gpu_afsm_gpu_ms": c.gpu.as_ref().map(|g| g.afsm.gpu_ms),
+        "gpu_afsm_vs_raytrace_mismatch_rate": c.gpu.as_ref().map(|g| g.mismatch_rate),
+        "gpu_raytrace_wall_ms": c.gpu.as_ref().map(|g| g.raytrace.wall_ms),
+        "gpu_raytrace_gpu_ms": c.gpu.as_ref().map(|g| g.raytrace.gpu_ms),
     })
 }

@@ -4,9 +4,11 @@
 //! several runs in milliseconds. `commands::bench` runs them.
 
 pub mod afsm_scaling;
+pub mod afsm_scaling_gpu;
 pub mod asm_walkthrough;
 pub mod csm_table;
 pub mod engines;
+pub mod gpu;
 pub mod psm_lights;
 pub mod soft_exact;
 pub mod subpixel_scaling;

@@ -347,6 +347,7 @@ fn print_table(m: &Metrics) {
             frames
         );
     }
+    print_devices(m);
     if let Some(a) = &m.area_light {
         println!(
             "area light ({}, {} light samples per pixel): the reference is the fraction of the light each point sees; \
@@ -361,6 +362,20 @@ fn print_table(m: &Metrics) {
     );
     if m.frames > 1 {
         print_sequence(m);
+    }
+}
+
+/// The GPU adapters the `gpu:` runs used, one line each (a software adapter's says its
+/// times are CPU-emulated).
+fn print_devices(m: &Metrics) {
+    let mut seen: Vec<&str> = Vec::new();
+    for run in &m.results {
+        if let Some(d) = run.figures.device.as_deref() {
+            if !seen.contains(&d) {
+                seen.push(d);
+                println!("GPU runs on {d}");
+            }
+        }
     }
 }
 

@@ -208,11 +208,13 @@ pub enum Suite {
     Engines,
     /// Exact soft shadows against the hard technique once per light sample.
     SoftExact,
+    /// The `gpu:` techniques' stage times beside their CPU twins.
+    Gpu,
 }
 
 impl Suite {
     /// Every suite, as the command line names them.
-    pub const ALL: [(Suite, &'static str); 7] = [
+    pub const ALL: [(Suite, &'static str); 8] = [
         (Suite::AfsmScaling, "afsm-scaling"),
         (Suite::SubpixelScaling, "subpixel-scaling"),
         (Suite::CsmTable, "csm-table"),
@@ -220,6 +222,7 @@ impl Suite {
         (Suite::PsmLights, "psm-lights"),
         (Suite::Engines, "engines"),
         (Suite::SoftExact, "soft-exact"),
+        (Suite::Gpu, "gpu"),
     ];
 
     /// The suite's name.

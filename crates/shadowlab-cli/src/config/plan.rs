@@ -29,6 +29,8 @@ pub const FILTERED_REFERENCE_SPP: u32 = 16;
 
 /// The reference samples per pixel that a technique's verdict uses.
 pub fn reference_spp_for(technique: &str, asked: Option<u32>) -> u32 {
+    // A `gpu:` technique is judged as its CPU twin.
+    let technique = technique.strip_prefix("gpu:").unwrap_or(technique);
     match asked {
         Some(n) => n,
         None if FILTERED.contains(&technique) => FILTERED_REFERENCE_SPP,

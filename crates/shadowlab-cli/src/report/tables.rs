@@ -72,12 +72,18 @@ fn run_row(o: &mut String, r: &RunResult, best: &Best) {
         .collect();
     let time = r.figures.time_ms;
     let (stages, stage_text) = stages(r);
-    let counters: Vec<String> = r
+    // A GPU run names its adapter first (a software adapter's says CPU-emulated).
+    let device = r
         .figures
-        .counters
+        .device
         .iter()
-        .map(|(k, v)| format!("<span class=\"kv\">{} {}</span>", esc(k), charts::short(*v)))
-        .collect();
+        .map(|d| format!("<span class=\"kv\">on {}</span>", esc(d)));
+    let counters: Vec<String> =
+        device
+            .chain(r.figures.counters.iter().map(|(k, v)| {
+                format!("<span class=\"kv\">{} {}</span>", esc(k), charts::short(*v))
+            }))
+            .collect();
     let memory = r.figures.memory_bytes as f64;
     let (mismatch, error) = (r.mismatch_rate, r.mean_abs_error);
     let cls = |v: f64, b: f64| if v <= b { " class=\"best\"" } else { "" };

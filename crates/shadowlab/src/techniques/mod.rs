@@ -43,8 +43,42 @@ pub const SOFT_VARIANTS: &[&str] = &["vsm-soft", "evsm-soft", "msm-soft", "csm-s
 /// reference). Not in the default set.
 pub const EXACT_SOFT: &str = "afsm-soft";
 
+/// Techniques that live in crates above the library (the GPU crate's `gpu:` names): every
+/// name starting with `prefix` goes to `create`, and `names` lists them for error messages.
+/// The program that links such a crate registers it once at start (see [`register`]), so
+/// every place that names a technique through [`create`] accepts its names.
+#[derive(Clone, Copy, Debug)]
+pub struct Extension {
+    /// The names' common prefix, such as `gpu:`.
+    pub prefix: &'static str,
+    /// Every name it creates.
+    pub names: &'static [&'static str],
+    /// Creates one of them by name, with default parameters.
+    pub create: fn(&str) -> Result<Box<dyn ShadowTechnique>>,
+}
+
+static EXTENSIONS: std::sync::RwLock<Vec<Extension>> = std::sync::RwLock::new(Vec::new());
+
+/// Registers `ext`; a second registration of the same prefix replaces the first.
+pub fn register(ext: Extension) {
+    let mut all = EXTENSIONS.write().unwrap_or_else(|e| e.into_inner());
+    all.retain(|e| e.prefix != ext.prefix);
+    all.push(ext);
+}
+
+/// The registered extensions, in the order they were registered.
+pub fn extensions() -> Vec<Extension> {
+    EXTENSIONS.read().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
 /// A technique by name, with default parameters.
 pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
+    if let Some(ext) = extensions()
+        .into_iter()
+        .find(|e| name.starts_with(e.prefix))
+    {
+        return (ext.create)(name);
+    }
     Ok(match name {
         "raytrace" => Box::new(raytrace::RayTrace::default()),
         "sm" => Box::new(shadow_map::ShadowMap::standard()),
@@ -68,11 +102,15 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
             t
         }
         _ => {
+            let more: String = extensions()
+                .iter()
+                .flat_map(|e| e.names.iter().map(|n| format!(", {n}")))
+                .collect();
             return Err(Error::param(format!(
-                "unknown technique {name:?}: known techniques are {}, {}, {EXACT_SOFT}",
+                "unknown technique {name:?}: known techniques are {}, {}, {EXACT_SOFT}{more}",
                 ALL.join(", "),
                 SOFT_VARIANTS.join(", ")
-            )))
+            )));
         }
     })
 }

@@ -1,0 +1,154 @@
+//! `gpu:` techniques on the command line: named wherever a technique is, side by side with
+//! their CPU twins in `compare` with the adapter recorded, and refused in one sentence
+//! when the adapter or a parameter cannot be had.
+
+mod support;
+
+use std::process::Command;
+use support::{metrics, quiet, refused, run_ok, shadowlab, tmp, Capture};
+
+/// `shadowlab` with a private runtime folder, so the Vulkan loader's window-system probes
+/// print nothing.
+fn gpu_run(dir: &std::path::Path) -> Command {
+    let runtime = dir.join("runtime");
+    std::fs::create_dir_all(&runtime).unwrap();
+    let mut c = shadowlab();
+    c.env("XDG_RUNTIME_DIR", &runtime);
+    c
+}
+
+/// [`gpu_run`] with `--quiet`.
+fn gpu_quiet(dir: &std::path::Path) -> Command {
+    let mut c = gpu_run(dir);
+    c.arg("--quiet");
+    c
+}
+
+/// True when a GPU adapter is there; under `CI=true` its absence fails the test, elsewhere
+/// the test is skipped with the reason.
+fn have_gpu(test: &str, dir: &std::path::Path) -> bool {
+    let r = gpu_quiet(dir)
+        .args([
+            "render",
+            "--scene",
+            "chessboard",
+            "--width",
+            "16",
+            "--height",
+            "12",
+        ])
+        .args(["--technique", "gpu:raytrace", "--output"])
+        .arg(dir.join("probe.png"))
+        .ran();
+    if r.success() {
+        return true;
+    }
+    assert!(r.stderr.contains("no GPU adapter"), "{test}: {}", r.stderr);
+    assert!(
+        std::env::var("CI").as_deref() != Ok("true"),
+        "{test}: no GPU adapter under CI: {}",
+        r.stderr
+    );
+    eprintln!("{test}: skipped: {}", r.stderr.trim());
+    false
+}
+
+#[test]
+fn compare_puts_cpu_and_gpu_side_by_side_with_the_adapter() {
+    let dir = tmp("gpu-compare");
+    if !have_gpu(
+        "compare_puts_cpu_and_gpu_side_by_side_with_the_adapter",
+        &dir,
+    ) {
+        return;
+    }
+    let out = dir.join("report");
+    // Not quiet: the table's line naming the adapter is checked.
+    let r = run_ok(
+        gpu_run(&dir)
+            .args([
+                "compare",
+                "--scene",
+                "chessboard",
+                "--width",
+                "96",
+                "--height",
+                "72",
+            ])
+            .args(["--techniques", "sm,gpu:sm,raytrace,gpu:raytrace"])
+            .args([
+                "--param",
+                "gpu:sm.resolution=1024",
+                "--param",
+                "sm.resolution=1024",
+            ])
+            .arg("--out")
+            .arg(&out),
+    );
+    assert!(r.stdout.contains("GPU runs on"), "{}", r.stdout);
+    let m = metrics(&out);
+    let results = m["results"].as_array().unwrap();
+    let names: Vec<&str> = results
+        .iter()
+        .map(|r| r["technique"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["sm", "gpu:sm", "raytrace", "gpu:raytrace"]);
+    for r in results {
+        let gpu = r["technique"].as_str().unwrap().starts_with("gpu:");
+        assert_eq!(r["device"].is_string(), gpu, "{r}");
+    }
+    // The GPU reference is the reference: no covered pixel differs.
+    assert_eq!(results[3]["mismatch_rate"].as_f64(), Some(0.0));
+    assert_eq!(results[1]["params"]["resolution"].as_u64(), Some(1024));
+}
+
+#[test]
+fn gpu_names_work_wherever_a_technique_is_named() {
+    let dir = tmp("gpu-names");
+    let r = run_ok(quiet().args(["techniques", "gpu:pcf"]));
+    assert!(
+        r.stdout.contains("gpu:pcf") && r.stdout.contains("kernel"),
+        "{}",
+        r.stdout
+    );
+    let r = gpu_quiet(&dir)
+        .args(["render", "--scene", "chessboard", "--technique", "gpu:sm"])
+        .args(["--param", "resolution=99999", "--output"])
+        .arg(dir.join("x.png"))
+        .ran();
+    refused(&r, &["gpu:sm.resolution", "99999"]);
+    let r = quiet().args(["techniques", "gpu:nope"]).ran();
+    refused(&r, &["gpu:nope", "gpu:sm", "gpu:raytrace"]);
+}
+
+#[test]
+fn an_adapter_that_is_not_there_is_named() {
+    let dir = tmp("gpu-adapter");
+    let r = gpu_quiet(&dir)
+        .args([
+            "--adapter",
+            "no-such-adapter-anywhere",
+            "render",
+            "--scene",
+            "chessboard",
+        ])
+        .args([
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--technique",
+            "gpu:sm",
+            "--output",
+        ])
+        .arg(dir.join("x.png"))
+        .ran();
+    // Either the adapters here are listed, or there are none and the sentence says what
+    // to install.
+    refused(&r, &["adapter"]);
+    assert!(
+        r.stderr.contains("no-such-adapter-anywhere") || r.stderr.contains("mesa-vulkan-drivers"),
+        "{}",
+        r.stderr
+    );
+}

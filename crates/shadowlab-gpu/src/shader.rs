@@ -1,0 +1,74 @@
+//! Shader composition: the shared WGSL of `shaders/common/` is written once and placed
+//! before each stage's own file.
+//!
+//! The include step is plain concatenation of `include_str!`ed files, in the order a
+//! stage's [`Stage::common`] lists them (a common file may use the ones listed before
+//! it). It needs no preprocessor and no extra crate, so the crate builds as fast as wgpu
+//! allows; the price is one namespace for every stage's functions, so common files name
+//! their items distinctly. A stage file starts with a comment naming the common files it
+//! is composed after.
+
+/// One common WGSL file.
+#[derive(Clone, Copy, Debug)]
+pub struct Common {
+    /// Its name under `shaders/common/`.
+    pub name: &'static str,
+    /// Its text.
+    pub source: &'static str,
+}
+
+/// `shaders/common/ray_offset.wgsl`: the error-bounded ray origin, `next_up`, `dot3`.
+pub const RAY_OFFSET: Common = Common {
+    name: "ray_offset.wgsl",
+    source: include_str!("shaders/common/ray_offset.wgsl"),
+};
+/// `shaders/common/light.wgsl`: the light, its shadow ray and `illuminates` (after
+/// [`RAY_OFFSET`]).
+pub const LIGHT: Common = Common {
+    name: "light.wgsl",
+    source: include_str!("shaders/common/light.wgsl"),
+};
+/// `shaders/common/watertight.wgsl`: the watertight ray–triangle test.
+pub const WATERTIGHT: Common = Common {
+    name: "watertight.wgsl",
+    source: include_str!("shaders/common/watertight.wgsl"),
+};
+/// `shaders/common/alpha_mask.wgsl`: materials and alpha-mask texel look-ups.
+pub const ALPHA_MASK: Common = Common {
+    name: "alpha_mask.wgsl",
+    source: include_str!("shaders/common/alpha_mask.wgsl"),
+};
+
+/// One pipeline stage's shader: the common files it needs and its own file.
+#[derive(Clone, Copy, Debug)]
+pub struct Stage {
+    /// The stage's file name, such as `trace.wgsl`.
+    pub name: &'static str,
+    /// The common files, in order.
+    pub common: &'static [Common],
+    /// The stage's own text.
+    pub source: &'static str,
+}
+
+impl Stage {
+    /// The composed WGSL: each common file, then the stage's own, each headed by its name.
+    pub fn compose(&self) -> String {
+        let mut out = String::new();
+        for c in self.common {
+            out.push_str(&format!("// ---- common/{} ----\n", c.name));
+            out.push_str(c.source);
+            out.push('\n');
+        }
+        out.push_str(&format!("// ---- {} ----\n", self.name));
+        out.push_str(self.source);
+        out
+    }
+
+    /// The stage's shader module on `device`.
+    pub fn module(&self, device: &wgpu::Device) -> wgpu::ShaderModule {
+        device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(self.name),
+            source: wgpu::ShaderSource::Wgsl(self.compose().into()),
+        })
+    }
+}

@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# Measures gpu:afsm's goals on a Linux machine with a datacenter GPU (H100/H200 class, no
+# display, no Rust toolchain) and writes them, with the log, to OUTDIR:
+#
+#   scripts/gpu-afsm-goals.sh BINARY OUTDIR
+#
+# - OUTDIR/afsm-scaling.json: `bench afsm-scaling`, whose GPU rows time gpu:afsm and
+#   gpu:raytrace (BVH prebuilt) at 1920x1080 on 1K-1M random triangles (goal: gpu:afsm's
+#   GPU time at most gpu:raytrace's at every size);
+# - OUTDIR/hairball-{afsm-1,afsm-32,raytrace}.json: `render --stats` of hairball (2.88M
+#   triangles) at 1920x1080 with gpu:afsm at 1 and 32 samples a pixel and gpu:raytrace
+#   (goals: gpu:afsm at most gpu:raytrace; 32 samples at most 2.5x one; 32 samples under
+#   16 ms). The GPU times are the counters gpu_*_ms; the 32-sample run's sub-pixel primary
+#   hits are traced on the CPU (stage subpixel_hits), outside the GPU time.
+#
+# BINARY, the Vulkan loader and NVIDIA's ICD are found by the same steps as in
+# scripts/gpu-bench.sh (read its header). The whole run is cut at 8 minutes.
+set -euo pipefail
+
+if [ $# -ne 2 ]; then
+    echo "usage: $0 BINARY OUTDIR" >&2
+    exit 2
+fi
+binary=$(realpath "$1")
+out=$2
+[ -x "$binary" ] || { echo "$binary is not an executable" >&2; exit 2; }
+mkdir -p "$out"
+log="$out/gpu-afsm-goals.log"
+: >"$log"
+say() { echo "$*" | tee -a "$log"; }
+
+if ! ldconfig -p 2>/dev/null | grep -q 'libvulkan\.so\.1'; then
+    debs=${SHADOWLAB_VULKAN_DEBS:-$(dirname "$binary")/.gl}
+    if ! ls "$debs"/*.deb >/dev/null 2>&1; then
+        say "no Vulkan loader here and no .deb files in $debs: copy libvulkan1's .deb there (apt-get download libvulkan1)"
+        exit 2
+    fi
+    for f in "$debs"/*.deb; do dpkg -x "$f" /; done
+    ldconfig
+fi
+if ! grep -lis nvidia /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json >/dev/null 2>&1; then
+    for d in /usr/local/nvidia/share/vulkan/icd.d /usr/share/vulkan/icd.d /etc/vulkan/icd.d; do
+        if [ -f "$d/nvidia_icd.json" ]; then
+            export VK_DRIVER_FILES="$d/nvidia_icd.json"
+            break
+        fi
+    done
+fi
+export SHADOWLAB_ADAPTER=${SHADOWLAB_ADAPTER:-NVIDIA}
+command -v nvidia-smi >/dev/null 2>&1 && nvidia-smi -L 2>&1 | tee -a "$log" || true
+
+deadline=$((SECONDS + 480))
+left() { echo $((deadline - SECONDS > 1 ? deadline - SECONDS : 1)); }
+run() {
+    say "running: $*"
+    timeout "$(left)" "$binary" --quiet "$@" 2>&1 | tee -a "$log"
+}
+set +e
+run bench afsm-scaling --json "$out/afsm-scaling.json"
+hair=(render --scene hairball --width 1920 --height 1080)
+run "${hair[@]}" --technique gpu:afsm --stats "$out/hairball-afsm-1.json"
+run "${hair[@]}" --technique gpu:afsm --param samples=32 --stats "$out/hairball-afsm-32.json"
+run "${hair[@]}" --technique gpu:raytrace --stats "$out/hairball-raytrace.json"
+set -e
+say "done"
