@@ -8,7 +8,6 @@
 //! was written.
 
 use crate::config::Setup;
-use serde::de::{MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use shadowlab::area_light::AreaLight;
@@ -37,21 +36,19 @@ impl Serialize for StageTimes {
 
 impl<'de> Deserialize<'de> for StageTimes {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct InOrder;
-        impl<'de> Visitor<'de> for InOrder {
-            type Value = StageTimes;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("an object of stage times")
-            }
-            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<StageTimes, A::Error> {
-                let mut out = Vec::new();
-                while let Some(entry) = map.next_entry()? {
-                    out.push(entry);
-                }
-                Ok(StageTimes(out))
-            }
-        }
-        d.deserialize_map(InOrder)
+        // The workspace's serde_json keeps an object's keys in order (`preserve_order`).
+        let stages = serde_json::Map::<String, serde_json::Value>::deserialize(d)?;
+        let time = |(k, v): (String, serde_json::Value)| match v.as_f64() {
+            Some(ms) => Ok((k, ms)),
+            None => Err(serde::de::Error::custom(format!(
+                "stage {k:?} is not a number"
+            ))),
+        };
+        stages
+            .into_iter()
+            .map(time)
+            .collect::<Result<_, _>>()
+            .map(StageTimes)
     }
 }
 

@@ -29,6 +29,7 @@ pub mod alpha_mask;
 pub mod builtin;
 pub mod export;
 pub mod gltf;
+mod input;
 mod material;
 pub mod mesh;
 pub mod obj;
@@ -39,6 +40,8 @@ pub mod texture_cache;
 pub mod toml;
 pub mod up;
 
+pub use input::{check_triangle_count, BYTES_PER_TRIANGLE, GROUND_TRIANGLES, MAX_TRIANGLES};
+pub(crate) use input::{file_name, read_input};
 pub use material::Material;
 pub use up::UpAxis;
 
@@ -51,60 +54,6 @@ use crate::limits;
 use crate::math::{vec3, Aabb, Mat4, Vec2, Vec3};
 use std::collections::BTreeMap;
 use std::path::Path;
-
-/// The most triangles a scene may hold; larger scenes are refused before allocation.
-pub const MAX_TRIANGLES: usize = 50_000_000;
-
-/// Triangles [`Scene::place_camera`] adds as the ground plane under a bare mesh; loaders
-/// count them in before they compare a file's triangles with [`MAX_TRIANGLES`].
-pub const GROUND_TRIANGLES: usize = 2;
-
-/// Bytes a run holds per scene triangle, for the estimate checked before a file's
-/// triangles are built. Measured: `compare` on 4,000,000 random triangles (scene, the ray
-/// tracer's BVH and its build scratch, the technique's light-space set-up) peaks at
-/// 1.26 GB, about 300 bytes a triangle; `render`, without the BVH, at about 80. The
-/// estimate is the larger, with the loader's decoded copy on top.
-pub const BYTES_PER_TRIANGLE: u64 = 320;
-
-/// Refuses a file that would bring `triangles` triangles (with the ground plane a bare
-/// mesh gets), naming the file, the count and the limit, before they are built: above
-/// [`MAX_TRIANGLES`], or an estimate above [`limits::memory_limit`].
-pub fn check_triangle_count(path: &Path, triangles: u64) -> Result<()> {
-    let total = triangles.saturating_add(GROUND_TRIANGLES as u64);
-    if total > MAX_TRIANGLES as u64 {
-        return Err(Error::Limit(format!(
-            "{} holds {triangles} triangles, more than the limit of {} (the scene's limit of {MAX_TRIANGLES} less the {GROUND_TRIANGLES} of the ground plane)",
-            path.display(),
-            MAX_TRIANGLES - GROUND_TRIANGLES
-        )));
-    }
-    limits::check_bytes(
-        || format!("{}: its {triangles} triangles", path.display()),
-        total.saturating_mul(BYTES_PER_TRIANGLE),
-    )
-}
-
-/// The bytes of the scene or mesh file `path`, which must be a regular file of at most
-/// `limit` bytes whose first bytes `sniff` accepts as its format
-/// ([`files::read_sniffed`]).
-pub(crate) fn read_input(
-    path: &Path,
-    limit: u64,
-    sniff: impl FnOnce(&[u8]) -> std::result::Result<(), String>,
-) -> Result<Vec<u8>> {
-    files::read_sniffed(path, limit, sniff).map_err(|e| match e {
-        files::Unread::File(why) => Error::io(path, why),
-        files::Unread::Format(what) => Error::format(path, what),
-    })
-}
-
-/// The last component of `path` as text (lossily, for a name that is not UTF-8), empty
-/// when there is none: the name a loaded scene gets and its messages use.
-pub(crate) fn file_name(path: &Path) -> String {
-    path.file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default()
-}
 
 /// A triangle soup in world space with per-triangle materials.
 #[derive(Clone, Debug, Default)]

@@ -47,7 +47,7 @@ pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
 /// [`load_with`], where `kd_alpha` says whether the alpha channel of a material's
 /// `map_Kd` image cuts it out when it has no `map_d`.
 pub fn load_opts(path: &Path, access: &Access, kd_alpha: bool) -> Result<Scene> {
-        let bytes = super::read_input(path, MAX_FILE_BYTES, |h| {
+    let bytes = super::read_input(path, MAX_FILE_BYTES, |h| {
         crate::files::sniff_text(h, "an OBJ file")
     })?;
     let (text, warnings) = prefilter(path, &bytes)?;

@@ -73,7 +73,6 @@ mod meshes;
 mod nodes;
 mod textures;
 
-
 use super::Scene;
 use crate::error::{Error, Result};
 use crate::files::{Access, MAX_FILE_BYTES};

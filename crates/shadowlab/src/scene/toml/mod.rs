@@ -127,7 +127,7 @@ pub fn load_with(path: &Path, access: &Access) -> Result<Scene> {
 /// [`load_with`], its OBJ meshes cut out by their `map_Kd` alpha (where they have no
 /// `map_d`) when `obj_kd_alpha`, unless a mesh's own `obj_kd_alpha` key says otherwise.
 pub fn load_opts(path: &Path, access: &Access, obj_kd_alpha: bool) -> Result<Scene> {
-        let bytes = super::read_input(path, MAX_SCENE_TEXT_BYTES, |h| {
+    let bytes = super::read_input(path, MAX_SCENE_TEXT_BYTES, |h| {
         crate::files::sniff_text(h, "a TOML scene")
     })?;
     let fmt = |what: String| Error::format(path, what);
