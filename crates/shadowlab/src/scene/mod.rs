@@ -50,7 +50,6 @@ use crate::camera::{Camera, CameraPath, AUTO_VIEW_DIRECTION};
 use crate::error::{Error, Result};
 use crate::files;
 use crate::light::Light;
-use crate::limits;
 use crate::math::{vec3, Aabb, Mat4, Vec2, Vec3};
 use std::collections::BTreeMap;
 use std::path::Path;
