@@ -1,6 +1,17 @@
 #!/usr/bin/env bash
-# Runs `shadowlab bench gpu` on a Linux machine with a datacenter GPU (H100/H200 class, no
-# display, no Rust toolchain) and writes OUTDIR/gpu-bench.json and OUTDIR/gpu-bench.log.
+# Runs `shadowlab bench gpu` and gpu:afsm's goals on a Linux machine with a datacenter GPU
+# (H100/H200 class, no display, no Rust toolchain) and writes to OUTDIR:
+#
+# - gpu-bench.json: `bench gpu` (every GPU technique's stage times beside its CPU twin's);
+# - afsm-scaling.json: `bench afsm-scaling`, whose GPU rows time gpu:afsm and gpu:raytrace
+#   (BVH prebuilt) at 1920x1080 on 1K-1M random triangles (goal: gpu:afsm's GPU time at
+#   most gpu:raytrace's at every size);
+# - hairball-{afsm-1,afsm-32,raytrace}.json: `render --stats` of hairball (2.88M
+#   triangles) at 1920x1080 with gpu:afsm at 1 and 32 samples a pixel and gpu:raytrace
+#   (goals: gpu:afsm at most gpu:raytrace; 32 samples at most 2.5x one; 32 samples under
+#   16 ms). GPU times are the counters gpu_*_ms; the 32-sample run's sub-pixel primary
+#   hits are traced on the CPU (stage subpixel_hits), outside the GPU time;
+# - gpu-bench.log: everything printed.
 #
 #   scripts/gpu-bench.sh BINARY OUTDIR
 #
@@ -19,8 +30,9 @@
 # points VK_DRIVER_FILES at it.
 #
 # The adapter is the first whose name contains $SHADOWLAB_ADAPTER (default: NVIDIA). The
-# whole run is cut at 8 minutes (the suite itself takes about 2 on such a GPU, most of it
-# the CPU twins' frames and hairball's loading).
+# whole run is cut at 8 minutes: a step still running then is ended and the next ones
+# skipped, so the JSON of the steps before it is kept (the CPU twins' frames and hairball's
+# loading are most of the time).
 set -euo pipefail
 
 if [ $# -ne 2 ]; then
@@ -58,10 +70,22 @@ fi
 export SHADOWLAB_ADAPTER=${SHADOWLAB_ADAPTER:-NVIDIA}
 
 command -v nvidia-smi >/dev/null 2>&1 && nvidia-smi -L 2>&1 | tee -a "$log" || true
-say "running: $binary bench gpu --json $out/gpu-bench.json (adapter: $SHADOWLAB_ADAPTER)"
+# One deadline for the whole run: `bench gpu` first, then gpu:afsm's goals.
+deadline=$((SECONDS + 480))
+left() { echo $((deadline - SECONDS > 1 ? deadline - SECONDS : 1)); }
+run() {
+    say "running: $* (adapter: $SHADOWLAB_ADAPTER)"
+    timeout "$(left)" "$binary" --quiet "$@" 2>&1 | tee -a "$log"
+    return "${PIPESTATUS[0]}"
+}
 set +e
-timeout 480 "$binary" --quiet bench gpu --json "$out/gpu-bench.json" 2>&1 | tee -a "$log"
-status=${PIPESTATUS[0]}
+run bench gpu --force --json "$out/gpu-bench.json"
+status=$?
+run bench afsm-scaling --force --json "$out/afsm-scaling.json"
+hair=(render --force --scene hairball --width 1920 --height 1080)
+run "${hair[@]}" --technique gpu:afsm --stats "$out/hairball-afsm-1.json"
+run "${hair[@]}" --technique gpu:afsm --param samples=32 --stats "$out/hairball-afsm-32.json"
+run "${hair[@]}" --technique gpu:raytrace --stats "$out/hairball-raytrace.json"
 set -e
-say "exit status $status"
+say "bench gpu's exit status $status"
 exit "$status"

@@ -39,6 +39,13 @@ pub const ALPHA_MASK: Common = Common {
     source: include_str!("shaders/common/alpha_mask.wgsl"),
 };
 
+/// `shaders/common/triangles.wgsl`: a triangle's vertices and the alpha-mask cut-out of a
+/// point on it (after [`ALPHA_MASK`]; the stage declares the scene's buffers).
+pub const TRIANGLES: Common = Common {
+    name: "triangles.wgsl",
+    source: include_str!("shaders/common/triangles.wgsl"),
+};
+
 /// One pipeline stage's shader: the common files it needs and its own file.
 #[derive(Clone, Copy, Debug)]
 pub struct Stage {

@@ -3,7 +3,7 @@
 // camera, view depth, and the screen-space derivatives of the position (the hardware's
 // dpdx/dpdy). The nearest surface wins the depth test; on equal depth the triangle drawn
 // first (the lower index). Alpha-masked surfaces are discarded where cut out. Composed
-// after shaders/common/{ray_offset, alpha_mask}.wgsl.
+// after shaders/common/{ray_offset, alpha_mask, triangles}.wgsl.
 
 struct CameraU {
     clip_from_world: mat4x4<f32>,
@@ -28,37 +28,17 @@ struct Varyings {
     @location(2) @interpolate(flat) tri: u32,
 }
 
-fn corner(tri: u32, k: u32) -> vec3<f32> {
-    let i = tri * 9u + k * 3u;
-    return vec3<f32>(tris[i], tris[i + 1u], tris[i + 2u]);
-}
-
 @vertex
 fn vs(@builtin(vertex_index) vi: u32) -> Varyings {
     let tri = vi / 3u;
     let k = vi % 3u;
-    let p = corner(tri, k);
+    let p = vertex(tri, k);
     var out: Varyings;
     out.clip = cam.clip_from_world * vec4<f32>(p, 1.0);
     out.world = p;
     out.bary = vec3<f32>(f32(k == 0u), f32(k == 1u), f32(k == 2u));
     out.tri = tri;
     return out;
-}
-
-fn cut_out(tri: u32, b: vec3<f32>) -> bool {
-    let m = materials[tri_material[tri]];
-    if cam.masks == 0u || m.masked == 0u {
-        return false;
-    }
-    let i = tri * 6u;
-    let uv = vec2<f32>(uvs[i], uvs[i + 1u]) * b.x + vec2<f32>(uvs[i + 2u], uvs[i + 3u]) * b.y
-        + vec2<f32>(uvs[i + 4u], uvs[i + 5u]) * b.z;
-    let x = wrap_texel(m.wrap_u, uv.x * f32(m.width), m.width);
-    let y = wrap_texel(m.wrap_v, uv.y * f32(m.height), m.height);
-    let byte = m.texel_offset + y * m.width + x;
-    let a = (texels[byte / 4u] >> ((byte % 4u) * 8u)) & 0xffu;
-    return !(f32(a) / 255.0 * m.factor >= m.cutoff);
 }
 
 struct GBuffer {
@@ -74,12 +54,12 @@ fn fs(v: Varyings) -> GBuffer {
     // Derivatives before any discard, so neighbouring lanes stay in step.
     let dx = dpdx(v.world);
     let dy = dpdy(v.world);
-    if cut_out(v.tri, v.bary) {
+    if cut_out(cam.masks, v.tri, v.bary) {
         discard;
     }
-    let v0 = corner(v.tri, 0u);
-    let e1 = corner(v.tri, 1u) - v0;
-    let e2 = corner(v.tri, 2u) - v0;
+    let v0 = vertex(v.tri, 0u);
+    let e1 = vertex(v.tri, 1u) - v0;
+    let e2 = vertex(v.tri, 2u) - v0;
     var n = normalize(cross(e1, e2));
     var to_eye = cam.eye - v.world;
     if cam.ortho != 0u {

@@ -13,7 +13,7 @@
 
 use crate::compute::render_pipeline;
 use crate::device::Gpu;
-use crate::shader::{Stage, ALPHA_MASK, RAY_OFFSET};
+use crate::shader::{Stage, ALPHA_MASK, RAY_OFFSET, TRIANGLES};
 use crate::transfer::{read_back, uniform, Timer};
 use crate::upload::SceneBuffers;
 use bytemuck::{Pod, Zeroable};
@@ -24,7 +24,7 @@ use shadowlab::raster::NO_TRIANGLE;
 
 const GBUFFER: Stage = Stage {
     name: "gbuffer.wgsl",
-    common: &[RAY_OFFSET, ALPHA_MASK],
+    common: &[RAY_OFFSET, ALPHA_MASK, TRIANGLES],
     source: include_str!("gbuffer.wgsl"),
 };
 

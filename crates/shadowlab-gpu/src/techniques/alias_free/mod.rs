@@ -86,7 +86,7 @@ mod samples;
 
 use crate::compute::to_rgb;
 use crate::device::{shared, Gpu};
-use crate::shader::{Common, Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, WATERTIGHT};
+use crate::shader::{Common, Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, TRIANGLES, WATERTIGHT};
 use crate::transfer::storage;
 use crate::upload::{view_buffer, SceneBuffers, SceneKey};
 use buffers::COUNTERS;
@@ -132,7 +132,7 @@ const RASTER: Stage = Stage {
 };
 const TEST: Stage = Stage {
     name: "test.wgsl",
-    common: &[RAY_OFFSET, LIGHT, WATERTIGHT, ALPHA_MASK, GRID],
+    common: &[RAY_OFFSET, LIGHT, WATERTIGHT, ALPHA_MASK, TRIANGLES, GRID],
     source: include_str!("test.wgsl"),
 };
 const SCAN: Stage = Stage {

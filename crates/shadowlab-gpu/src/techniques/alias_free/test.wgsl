@@ -5,7 +5,7 @@
 // lie in front of the triangle, or lie outside its footprint, and decides every live
 // sample under the footprint by the watertight test on the sample's own shadow ray, as
 // gpu:raytrace decides it. `resolve` then averages each pixel's samples. Composed after
-// shaders/common/{ray_offset, light, watertight, alpha_mask}.wgsl and grid.wgsl.
+// shaders/common/{ray_offset, light, watertight, alpha_mask, triangles}.wgsl and grid.wgsl.
 
 @group(0) @binding(0) var<uniform> params: AfsmParams;
 @group(0) @binding(1) var<storage, read> planes: array<u32>;
@@ -53,29 +53,6 @@ const C_ITEMS: u32 = 5u;
 const N_COUNTERS: u32 = 6u;
 
 var<workgroup> wcount: array<atomic<u32>, 6>;
-
-fn vertex(tri: u32, k: u32) -> vec3<f32> {
-    let i = tri * 9u + k * 3u;
-    return vec3<f32>(tris[i], tris[i + 1u], tris[i + 2u]);
-}
-
-// The library's `Scene::cut_out`: true where the triangle's mask removes it at `b`.
-fn cut_out(tri: u32, b: vec3<f32>) -> bool {
-    let m = materials[tri_material[tri]];
-    if params.masks == 0u || m.masked == 0u {
-        return false;
-    }
-    let i = tri * 6u;
-    let uv0 = vec2<f32>(uvs[i], uvs[i + 1u]);
-    let uv1 = vec2<f32>(uvs[i + 2u], uvs[i + 3u]);
-    let uv2 = vec2<f32>(uvs[i + 4u], uvs[i + 5u]);
-    let uv = uv0 * b.x + uv1 * b.y + uv2 * b.z;
-    let x = wrap_texel(m.wrap_u, uv.x * f32(m.width), m.width);
-    let y = wrap_texel(m.wrap_v, uv.y * f32(m.height), m.height);
-    let byte = m.texel_offset + y * m.width + x;
-    let a = (texels[byte / 4u] >> ((byte % 4u) * 8u)) & 0xffu;
-    return !(f32(a) / 255.0 * m.factor >= m.cutoff);
-}
 
 // Adds `q` to the channel word `w`, saturating at LOG_CAP; the new value.
 fn add_log(w: u32, q: u32) -> u32 {
@@ -240,7 +217,7 @@ fn chunk_test(o: u32, tri: u32, chunk: u32, acc: ptr<function, Local>) {
                        bitcast<vec3<f32>>(vec3<u32>(sorted_ray[rb8 + 4u], sorted_ray[rb8 + 5u], sorted_ray[rb8 + 6u])));
         let t_max = bitcast<f32>(sorted_ray[rb8 + 7u]);
         let h = intersect_sheared(ro, sh, 0.0, t_max, v0, v1, v2);
-        if !h.ok || cut_out(tri, h.b) {
+        if !h.ok || cut_out(params.masks, tri, h.b) {
             continue;
         }
         if opaque {

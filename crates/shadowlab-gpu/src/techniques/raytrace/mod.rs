@@ -25,7 +25,7 @@
 
 use crate::compute::{bind, pipeline, to_rgb};
 use crate::device::{shared, Gpu};
-use crate::shader::{Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, WATERTIGHT};
+use crate::shader::{Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, TRIANGLES, WATERTIGHT};
 use crate::transfer::{grid, output, read_back, uniform, Timer};
 use crate::upload::{view_buffer, BvhBuffers, LightU, SceneBuffers, SceneKey};
 use bytemuck::{Pod, Zeroable};
@@ -43,7 +43,7 @@ pub const NAME: &str = "gpu:raytrace";
 /// `trace.wgsl`, composed after the common files it uses.
 const TRACE: Stage = Stage {
     name: "trace.wgsl",
-    common: &[RAY_OFFSET, LIGHT, WATERTIGHT, ALPHA_MASK],
+    common: &[RAY_OFFSET, LIGHT, WATERTIGHT, ALPHA_MASK, TRIANGLES],
     source: include_str!("trace.wgsl"),
 };
 

@@ -1,7 +1,7 @@
 // gpu:raytrace, stage `trace`: one shadow ray per covered pixel of the camera pass,
 // through the library's wide BVH (flattened: eight child records a node), exactly as the
 // CPU reference forms and tests it. Composed after shaders/common/{ray_offset, light,
-// watertight, alpha_mask}.wgsl.
+// watertight, alpha_mask, triangles}.wgsl.
 
 struct Params {
     light: LightU,
@@ -50,29 +50,6 @@ const SLAB_STRETCH: f32 = 1.000001;
 // slab test never multiplies zero by infinity; it can only visit more boxes.
 const TINY_DIR: f32 = 1e-30;
 
-fn vertex(tri: u32, k: u32) -> vec3<f32> {
-    let i = tri * 9u + k * 3u;
-    return vec3<f32>(tris[i], tris[i + 1u], tris[i + 2u]);
-}
-
-// The library's `Scene::cut_out`: true where the triangle's mask removes it at `b`.
-fn cut_out(tri: u32, b: vec3<f32>) -> bool {
-    let m = materials[tri_material[tri]];
-    if params.masks == 0u || m.masked == 0u {
-        return false;
-    }
-    let i = tri * 6u;
-    let uv0 = vec2<f32>(uvs[i], uvs[i + 1u]);
-    let uv1 = vec2<f32>(uvs[i + 2u], uvs[i + 3u]);
-    let uv2 = vec2<f32>(uvs[i + 4u], uvs[i + 5u]);
-    let uv = uv0 * b.x + uv1 * b.y + uv2 * b.z;
-    let x = wrap_texel(m.wrap_u, uv.x * f32(m.width), m.width);
-    let y = wrap_texel(m.wrap_v, uv.y * f32(m.height), m.height);
-    let byte = m.texel_offset + y * m.width + x;
-    let a = (texels[byte / 4u] >> ((byte % 4u) * 8u)) & 0xffu;
-    return !(f32(a) / 255.0 * m.factor >= m.cutoff);
-}
-
 // The lowest triangle index above `after` that the segment o + t·dir, t in (0, t_max),
 // meets (skipping `own`), or NO_TRIANGLE; with `any` the first met in traversal order.
 fn first_hit(o: vec3<f32>, dir: vec3<f32>, t_max: f32, own: u32, after: i32, any: bool) -> u32 {
@@ -115,7 +92,7 @@ fn first_hit(o: vec3<f32>, dir: vec3<f32>, t_max: f32, own: u32, after: i32, any
                     continue;
                 }
                 let h = intersect_sheared(o, sh, 0.0, t_max, vertex(tri, 0u), vertex(tri, 1u), vertex(tri, 2u));
-                if h.ok && !cut_out(tri, h.b) {
+                if h.ok && !cut_out(params.masks, tri, h.b) {
                     best = tri;
                     if any {
                         return best;
@@ -184,7 +161,7 @@ fn gather(o: vec3<f32>, dir: vec3<f32>, t_max: f32, own: u32, after: i32) -> Gat
                     continue;
                 }
                 let h = intersect_sheared(o, sh, 0.0, t_max, vertex(tri, 0u), vertex(tri, 1u), vertex(tri, 2u));
-                if !h.ok || cut_out(tri, h.b) {
+                if !h.ok || cut_out(params.masks, tri, h.b) {
                     continue;
                 }
                 if materials[tri_material[tri]].opaque != 0u {
@@ -349,7 +326,7 @@ fn closest_hit(o: vec3<f32>, dir: vec3<f32>) -> Closest {
             for (var k = 0u; k < count; k++) {
                 let tri = prims[ch.index + k];
                 let h = intersect_sheared(o, sh, 0.0, params.light.far, vertex(tri, 0u), vertex(tri, 1u), vertex(tri, 2u));
-                if h.ok && !cut_out(tri, h.b) && (h.t < best.t || (h.t == best.t && tri < best.tri)) {
+                if h.ok && !cut_out(params.masks, tri, h.b) && (h.t < best.t || (h.t == best.t && tri < best.tri)) {
                     best = Closest(tri, h.t, h.b);
                 }
             }

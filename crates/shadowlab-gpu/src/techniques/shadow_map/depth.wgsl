@@ -4,7 +4,7 @@
 // `depth_scale`, written as the fragment's depth, so the nearest caster wins the hardware
 // depth test and the look-up compares linear depths as the CPU does. Alpha-masked
 // casters are discarded where their texture cuts them out, at the fragment's perspective-
-// correct barycentrics. Composed after shaders/common/alpha_mask.wgsl.
+// correct barycentrics. Composed after shaders/common/{alpha_mask, triangles}.wgsl.
 
 struct FaceU {
     clip_from_world: mat4x4<f32>,
@@ -35,8 +35,7 @@ struct Varyings {
 fn vs(@builtin(vertex_index) vi: u32) -> Varyings {
     let tri = vi / 3u;
     let k = vi % 3u;
-    let i = tri * 9u + k * 3u;
-    let p = vec4<f32>(tris[i], tris[i + 1u], tris[i + 2u], 1.0);
+    let p = vec4<f32>(vertex(tri, k), 1.0);
     var out: Varyings;
     out.clip = face.clip_from_world * p;
     out.depth = -(face.light_from_world * p).z;
@@ -45,25 +44,9 @@ fn vs(@builtin(vertex_index) vi: u32) -> Varyings {
     return out;
 }
 
-// The library's `Scene::cut_out` at barycentrics `b`.
-fn cut_out(tri: u32, b: vec3<f32>) -> bool {
-    let m = materials[tri_material[tri]];
-    if face.masks == 0u || m.masked == 0u {
-        return false;
-    }
-    let i = tri * 6u;
-    let uv = vec2<f32>(uvs[i], uvs[i + 1u]) * b.x + vec2<f32>(uvs[i + 2u], uvs[i + 3u]) * b.y
-        + vec2<f32>(uvs[i + 4u], uvs[i + 5u]) * b.z;
-    let x = wrap_texel(m.wrap_u, uv.x * f32(m.width), m.width);
-    let y = wrap_texel(m.wrap_v, uv.y * f32(m.height), m.height);
-    let byte = m.texel_offset + y * m.width + x;
-    let a = (texels[byte / 4u] >> ((byte % 4u) * 8u)) & 0xffu;
-    return !(f32(a) / 255.0 * m.factor >= m.cutoff);
-}
-
 @fragment
 fn fs(v: Varyings) -> @builtin(frag_depth) f32 {
-    if cut_out(v.tri, v.bary) {
+    if cut_out(face.masks, v.tri, v.bary) {
         discard;
     }
     return clamp(v.depth / face.depth_scale, 0.0, 1.0);

@@ -22,7 +22,7 @@
 
 use crate::compute::{bind_entries, pipeline, render_pipeline, to_rgb};
 use crate::device::{shared, Gpu};
-use crate::shader::{Stage, ALPHA_MASK, LIGHT, RAY_OFFSET};
+use crate::shader::{Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, TRIANGLES};
 use crate::transfer::{grid, output, read_back, storage, uniform, Timer};
 use crate::upload::{view_buffer, LightU, SceneBuffers, SceneKey};
 use bytemuck::{Pod, Zeroable};
@@ -40,7 +40,7 @@ pub const PCF: &str = "gpu:pcf";
 
 const DEPTH: Stage = Stage {
     name: "depth.wgsl",
-    common: &[ALPHA_MASK],
+    common: &[ALPHA_MASK, TRIANGLES],
     source: include_str!("depth.wgsl"),
 };
 
