@@ -72,39 +72,9 @@ pub struct GpuView {
 }
 
 fn pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
-    let module = GBUFFER.module(device);
     let targets: Vec<Option<wgpu::ColorTargetState>> =
         TARGETS.iter().map(|&f| Some(f.into())).collect();
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("gbuffer"),
-        layout: None,
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: wgpu::PrimitiveState {
-            cull_mode: None,
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: wgpu::TextureFormat::Depth32Float,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs"),
-            compilation_options: Default::default(),
-            targets: &targets,
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
+    GBUFFER.depth_tested_pipeline(device, &targets)
 }
 
 fn target(gpu: &Gpu, camera: &Camera, format: wgpu::TextureFormat) -> wgpu::Texture {

@@ -176,37 +176,7 @@ impl GpuShadowMap {
 /// The depth stage's render pipeline: no colour target, a 32-bit float depth written by
 /// the fragment, the nearest kept (`Less`), both faces drawn.
 fn depth_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
-    let module = DEPTH.module(device);
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("depth"),
-        layout: None,
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: wgpu::PrimitiveState {
-            cull_mode: None,
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: wgpu::TextureFormat::Depth32Float,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs"),
-            compilation_options: Default::default(),
-            targets: &[],
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
+    DEPTH.depth_tested_pipeline(device, &[])
 }
 
 impl ShadowTechnique for GpuShadowMap {
