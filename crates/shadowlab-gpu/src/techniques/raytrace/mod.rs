@@ -268,9 +268,23 @@ fn supersample(
         .supersample
         .as_ref()
         .ok_or_else(|| Error::Internal(format!("{NAME}: no supersample pipeline")))?;
+    let mut buffers = trace_bindings(res, &params, view, out);
+    buffers.extend([&subpixel, &cam]);
+    dispatch(gpu, pipeline, &buffers, groups, timer);
+    Ok(())
+}
+
+/// The bindings `trace.wgsl` declares in both of its entry points, in binding order: the
+/// parameters, the scene and its BVH, the camera pass's samples and the output.
+fn trace_bindings<'a>(
+    res: &'a Resident,
+    params: &'a wgpu::Buffer,
+    view: &'a wgpu::Buffer,
+    out: &'a wgpu::Buffer,
+) -> Vec<&'a wgpu::Buffer> {
     let s = &res.scene;
-    let buffers = [
-        &params,
+    vec![
+        params,
         &s.triangles,
         &res.bvh.children,
         &res.bvh.primitives,
@@ -280,11 +294,7 @@ fn supersample(
         &s.texels,
         view,
         out,
-        &subpixel,
-        &cam,
-    ];
-    dispatch(gpu, pipeline, &buffers, groups, timer);
-    Ok(())
+    ]
 }
 
 /// Records and submits the one-sample trace.
@@ -298,19 +308,7 @@ fn trace(
     let gpu = &res.gpu;
     let (params, groups) = trace_params(gpu, res, frame);
     let params = uniform(gpu, "trace parameters", &params);
-    let s = &res.scene;
-    let buffers = [
-        &params,
-        &s.triangles,
-        &res.bvh.children,
-        &res.bvh.primitives,
-        &s.material_of,
-        &s.materials,
-        &s.uvs,
-        &s.texels,
-        view,
-        out,
-    ];
+    let buffers = trace_bindings(res, &params, view, out);
     dispatch(gpu, &res.trace, &buffers, groups, timer);
     Ok(())
 }
