@@ -5,12 +5,11 @@
 mod support;
 
 use shadowlab::compare::compare;
-use shadowlab::light::Light;
-use shadowlab::math::{vec3, Vec3};
+use shadowlab::math::Vec3;
 use shadowlab::reference::Reference;
 use shadowlab::sampling::{pattern, PatternKind};
 use shadowlab::techniques::{self, Frame};
-use support::{builtin, framed, have_gpu, Set};
+use support::{builtin, have_gpu, Set, ERROR_ABS, ERROR_FACTOR};
 
 /// The share of covered pixels on which a GPU map may differ from its CPU twin: the
 /// hardware rasterizer rounds coverage and depth differently from the library's on a few
@@ -21,11 +20,6 @@ const DIFFER_SHARE: f64 = 5e-4;
 /// weights are quantized (8 bits of sub-texel position on many adapters, so a tap's weight
 /// is off by at most 1/256 and the kernel's mean likewise).
 const PCF_DIFFERENCE: f32 = 1.0 / 64.0;
-
-/// Their errors against the reference may differ by this factor …
-const ERROR_FACTOR: f64 = 0.10;
-/// … or by this much absolutely, for errors near zero.
-const ERROR_ABS: f64 = 0.0002;
 
 fn check(name: &str, set: &Set, technique: &str) {
     shadowlab_gpu::register();
@@ -85,16 +79,6 @@ fn check(name: &str, set: &Set, technique: &str) {
     );
 }
 
-fn room_point() -> Set {
-    let room = shadowlab::scene::load("room", &Default::default()).unwrap();
-    let b = room.bounds;
-    let c = b.center();
-    let point = Light::Point {
-        position: vec3(c.x, b.min.y + 0.8 * (b.max.y - b.min.y), c.z),
-    };
-    framed(room, 128, 96, Some(point))
-}
-
 #[test]
 fn gpu_sm_and_pcf_match_their_cpu_twins() {
     if !have_gpu("gpu_sm_and_pcf_match_their_cpu_twins") {
@@ -103,7 +87,7 @@ fn gpu_sm_and_pcf_match_their_cpu_twins() {
     let sets = [
         ("bunny", builtin("bunny", 128, 96, None)),
         ("chessboard", builtin("chessboard", 128, 96, None)),
-        ("room (point light)", room_point()),
+        ("room (point light)", support::room_point()),
         ("leaf (alpha mask)", support::leaf()),
     ];
     for (name, set) in &sets {

@@ -73,3 +73,86 @@ pub fn differing(
     }
     (diff, covered)
 }
+
+/// A verdict's error allowance: the GPU technique's mean error against the reference may
+/// differ from its CPU twin's by this share of the CPU's error …
+pub const ERROR_FACTOR: f64 = 0.10;
+/// … or by this much absolutely, whichever is larger (for errors near zero).
+pub const ERROR_ABS: f64 = 0.0002;
+
+/// The scenes every GPU technique is judged on: bunny and chessboard under their own
+/// lights, room under a point light near its ceiling, and the alpha-masked leaf.
+pub fn verdict_sets() -> Vec<(&'static str, Set)> {
+    vec![
+        ("bunny", builtin("bunny", 128, 96, None)),
+        ("chessboard", builtin("chessboard", 128, 96, None)),
+        ("room (point light)", room_point()),
+        ("leaf (alpha mask)", leaf()),
+    ]
+}
+
+/// `room` lit by a point light at 80% of its height, over its centre.
+pub fn room_point() -> Set {
+    let room = shadowlab::scene::load("room", &Default::default()).unwrap();
+    let b = room.bounds;
+    let c = b.center();
+    let point = Light::Point {
+        position: shadowlab::math::vec3(c.x, b.min.y + 0.8 * (b.max.y - b.min.y), c.z),
+    };
+    framed(room, 128, 96, Some(point))
+}
+
+/// What a verdict found, for tests that check more.
+pub struct Verdict {
+    /// The GPU technique's shadow terms.
+    pub gpu: Vec<shadowlab::math::Vec3>,
+    /// The CPU twin's.
+    pub cpu: Vec<shadowlab::math::Vec3>,
+    /// Mean absolute errors against the reference: GPU, CPU.
+    pub errors: (f64, f64),
+}
+
+/// Judges `gpu` (a `gpu:` name) beside `cpu` on `set`, both with `params` (`key=value`):
+/// two GPU runs give the same bits; the GPU's mean error against a reference of `spp`
+/// samples a pixel is within [`ERROR_FACTOR`] of the CPU's or [`ERROR_ABS`]; and the
+/// image shows shadow (more than 50 pixels under one half), so the test means something.
+pub fn verdict(scene: &str, set: &Set, gpu: &str, cpu: &str, params: &[&str], spp: u32) -> Verdict {
+    use shadowlab::techniques::{self, Frame};
+    shadowlab_gpu::register();
+    let (s, c, l, view) = (&set.0, &set.1, &set.2, &set.3);
+    let frame = Frame::new(s, c, l, view);
+    let make = |name: &str| {
+        let mut t = techniques::create(name).unwrap();
+        for p in params {
+            let (k, v) = p.split_once('=').unwrap();
+            t.set_param(k, v).unwrap();
+        }
+        t
+    };
+    let a = make(gpu).render(&frame).unwrap();
+    let b = make(gpu).render(&frame).unwrap();
+    assert!(
+        a.visibility.value == b.visibility.value,
+        "{scene}: two runs of {gpu} differ"
+    );
+    let cpu_shadows = make(cpu).render(&frame).unwrap();
+    let pattern =
+        shadowlab::sampling::pattern(shadowlab::sampling::PatternKind::Grid, spp).unwrap();
+    let reference = shadowlab::reference::Reference::build(s).visibility(&frame, &pattern);
+    let eg = shadowlab::compare::compare(view, &a.visibility, &reference).mean_abs_error;
+    let ec = shadowlab::compare::compare(view, &cpu_shadows.visibility, &reference).mean_abs_error;
+    assert!(
+        (eg - ec).abs() <= (ERROR_FACTOR * ec).max(ERROR_ABS),
+        "{scene}: {gpu}'s error {eg} against the reference is not within 10% of {cpu}'s {ec} (or {ERROR_ABS})"
+    );
+    let shadowed = a.visibility.value.iter().filter(|v| v.x < 0.5).count();
+    assert!(
+        shadowed > 50,
+        "{scene}: {gpu} has only {shadowed} shadowed pixels: the test shows nothing"
+    );
+    Verdict {
+        gpu: a.visibility.value,
+        cpu: cpu_shadows.visibility.value,
+        errors: (eg, ec),
+    }
+}
