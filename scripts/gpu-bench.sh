@@ -3,6 +3,11 @@
 # (H100/H200 class, no display, no Rust toolchain) and writes to OUTDIR:
 #
 # - gpu-bench.json: `bench gpu` (every GPU technique's stage times beside its CPU twin's);
+# - engines-gpu.json and engines-gpu-plots/: `bench engines --backend gpu` (every GPU
+#   technique at equal shadow memory on the CPU suite's scenes, error against GPU time,
+#   the Pareto front; the goal ratios gpu:csm/gpu:pcf <= 1.3, gpu:psm/gpu:sm <= 1.15,
+#   gpu:msm/gpu:vsm <= 1.3, gpu:cascaded/gpu:sm <= 1.5 for the pairs built, and each
+#   technique on chessboard at 1920x1080 against 2 ms);
 # - afsm-scaling.json: `bench afsm-scaling`, whose GPU rows time gpu:afsm and gpu:raytrace
 #   (BVH prebuilt) at 1920x1080 on 1K-1M random triangles (goal: gpu:afsm's GPU time at
 #   most gpu:raytrace's at every size);
@@ -70,7 +75,8 @@ fi
 export SHADOWLAB_ADAPTER=${SHADOWLAB_ADAPTER:-NVIDIA}
 
 command -v nvidia-smi >/dev/null 2>&1 && nvidia-smi -L 2>&1 | tee -a "$log" || true
-# One deadline for the whole run: `bench gpu` first, then gpu:afsm's goals.
+# One deadline for the whole run: `bench gpu` first, then the engines suite on the GPU,
+# then gpu:afsm's goals.
 deadline=$((SECONDS + 480))
 left() { echo $((deadline - SECONDS > 1 ? deadline - SECONDS : 1)); }
 run() {
@@ -81,6 +87,7 @@ run() {
 set +e
 run bench gpu --force --json "$out/gpu-bench.json"
 status=$?
+run bench engines --backend gpu --force --json "$out/engines-gpu.json" --plots "$out/engines-gpu-plots"
 run bench afsm-scaling --force --json "$out/afsm-scaling.json"
 hair=(render --force --scene hairball --width 1920 --height 1080)
 run "${hair[@]}" --technique gpu:afsm --stats "$out/hairball-afsm-1.json"

@@ -237,6 +237,10 @@ pub struct BenchArgs {
     /// Let --json and --plots replace existing files.
     #[arg(long)]
     pub force: bool,
+    /// What `engines` measures: `cpu` (the library's techniques) or `gpu` (every `gpu:`
+    /// technique, timed by the GPU).
+    #[arg(long, default_value = "cpu")]
+    pub backend: String,
 }
 
 /// `shadowlab view`.

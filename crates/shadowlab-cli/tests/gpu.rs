@@ -152,3 +152,90 @@ fn an_adapter_that_is_not_there_is_named() {
         r.stderr
     );
 }
+
+#[test]
+fn all_and_gpu_all_put_each_pair_side_by_side() {
+    let dir = tmp("gpu-all");
+    if !have_gpu("all_and_gpu_all_put_each_pair_side_by_side", &dir) {
+        return;
+    }
+    let out = dir.join("report");
+    run_ok(
+        gpu_quiet(&dir)
+            .args(["compare", "--scene", "chessboard", "--width", "40"])
+            .args(["--height", "30", "--techniques", "all,gpu:all", "--out"])
+            .arg(&out),
+    );
+    let m = metrics(&out);
+    let names: Vec<String> = m["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["technique"].as_str().unwrap().to_string())
+        .collect();
+    for n in ["sm", "psm", "lispsm", "cascaded", "raytrace", "afsm"] {
+        let at = names
+            .iter()
+            .position(|x| x == n)
+            .unwrap_or_else(|| panic!("{n}: {names:?}"));
+        assert_eq!(names.get(at + 1), Some(&format!("gpu:{n}")), "{names:?}");
+    }
+    // Every GPU name follows its CPU twin when the twin ran, and each name runs once.
+    for (i, n) in names.iter().enumerate() {
+        if let Some(base) = n.strip_prefix("gpu:") {
+            if names.iter().any(|x| x == base) {
+                assert_eq!(names[i - 1], base, "{names:?}");
+            }
+        }
+        assert_eq!(names.iter().filter(|x| *x == n).count(), 1, "{names:?}");
+    }
+}
+
+#[test]
+fn bench_engines_on_the_gpu_times_every_gpu_technique() {
+    let dir = tmp("gpu-bench-engines");
+    if !have_gpu("bench_engines_on_the_gpu_times_every_gpu_technique", &dir) {
+        return;
+    }
+    let json = dir.join("engines.json");
+    let r = run_ok(
+        gpu_run(&dir)
+            .args(["bench", "engines", "--backend", "gpu", "--quick", "--json"])
+            .arg(&json)
+            .arg("--plots")
+            .arg(dir.join("plots")),
+    );
+    assert!(r.stdout.contains("adapter:"), "{}", r.stdout);
+    let rows = support::read_json(&json)["rows"]
+        .as_array()
+        .unwrap()
+        .clone();
+    let ran = |n: &str, goal: bool| {
+        rows.iter()
+            .any(|r| r["technique"] == n && r["frame_goal"].as_bool().unwrap_or(false) == goal)
+    };
+    for n in ["gpu:sm", "gpu:pcf", "gpu:psm", "gpu:lispsm", "gpu:cascaded"] {
+        assert!(ran(n, false) && ran(n, true), "{n}: {rows:?}");
+    }
+    for r in &rows {
+        assert!(
+            r["adapter"].is_string() && r["cpu_emulated"].is_boolean(),
+            "{r}"
+        );
+        assert!(r["time_ms"].as_f64().is_some_and(|t| t >= 0.0), "{r}");
+        if r["budget_mib"] == 4 {
+            assert!(r["memory_bytes"].as_u64().unwrap() <= 4 << 20, "{r}");
+        }
+    }
+    // The goal ratio of the pair present in every build.
+    assert!(r.stdout.contains("time gpu:psm/gpu:sm"), "{}", r.stdout);
+    assert!(dir
+        .join("plots/engines-gpu-street-error-vs-time.svg")
+        .exists());
+    let r = quiet()
+        .args(["bench", "csm-table", "--backend", "gpu"])
+        .ran();
+    refused(&r, &["--backend gpu", "engines"]);
+    let r = quiet().args(["bench", "engines", "--backend", "tpu"]).ran();
+    refused(&r, &["--backend", "tpu"]);
+}

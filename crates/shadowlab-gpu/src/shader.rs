@@ -46,6 +46,13 @@ pub const TRIANGLES: Common = Common {
     source: include_str!("shaders/common/triangles.wgsl"),
 };
 
+/// `shaders/common/map_compare.wgsl`: the receiver bias, cube face, nearest-texel and PCF
+/// comparisons the warped and split maps' look-ups share (after [`RAY_OFFSET`]).
+pub const MAP_COMPARE: Common = Common {
+    name: "map_compare.wgsl",
+    source: include_str!("shaders/common/map_compare.wgsl"),
+};
+
 /// One pipeline stage's shader: the common files it needs and its own file.
 #[derive(Clone, Copy, Debug)]
 pub struct Stage {

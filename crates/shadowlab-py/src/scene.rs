@@ -383,7 +383,9 @@ impl PyScene {
     /// Every technique of `techniques` (default: all) against the ray-traced reference on
     /// one frame: a dict shaped like `metrics.json` (`results[i]` with `mismatch_rate`,
     /// `mean_abs_error`, `time_ms`, `memory_bytes`, ...). `params` maps a technique name
-    /// to its parameters.
+    /// to its parameters. In `techniques`, `"all"` stands for every CPU technique and
+    /// `"gpu:all"` for every GPU one, and a technique's `gpu:` twin follows it, as
+    /// `compare --techniques` orders them.
     /// Under an area light the reference is the soft-shadow reference with
     /// the light's `samples` per pixel, and `reference.mean_std_error` states its own
     /// noise.
@@ -408,8 +410,10 @@ impl PyScene {
         let reference_spp: u32 = reference_spp.get("reference_spp", 1, u32::MAX.into())?;
         let py = slf.py();
         let (c, l, area, light_samples) = slf.resolve(camera, light)?;
-        let names: Vec<String> =
-            techniques.unwrap_or_else(|| techniques::ALL.iter().map(|s| s.to_string()).collect());
+        let names: Vec<String> = match techniques {
+            Some(list) => techniques::expand_names(&list),
+            None => techniques::ALL.iter().map(|s| s.to_string()).collect(),
+        };
         if names.len() > shadowlab::limits::MAX_RUNS {
             return Err(bad(format!(
                 "techniques lists {} runs, more than the limit of {}",

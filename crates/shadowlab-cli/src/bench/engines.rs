@@ -24,11 +24,10 @@
 //! ratio is printed as the median and the worst over the run's scene × budget pairs (under
 //! spot and point lights `cascaded` and `lispsm` fall back to `sm`'s one map).
 
+pub use super::engines_rows::{Backend, Row};
 use super::{median_ms, BenchReport};
-use crate::charts::{self, Axis, Point, Series};
 use crate::config::BenchConfig;
 use anyhow::{Context, Result};
-use serde_json::{json, Value};
 use shadowlab::compare::compare;
 use shadowlab::math::vec2;
 use shadowlab::reference::Reference;
@@ -59,27 +58,13 @@ const LISPSM_TIME_TARGET: f64 = 1.15;
 /// `cascaded`'s mismatch on `street` at 16 MiB, at most this share of `sm`'s.
 const CASCADED_MISMATCH_TARGET: f64 = 0.25;
 
-/// One measured technique at one budget.
-struct Row {
-    scene: String,
-    technique: String,
-    budget_mib: Option<u64>,
-    resolution: Option<u32>,
-    memory_bytes: u64,
-    time_ms: f64,
-    mismatch: f64,
-    mean_error: f64,
-}
-
-impl Row {
-    fn json(&self) -> Value {
-        json!({
-            "scene": self.scene, "technique": self.technique, "budget_mib": self.budget_mib,
-            "resolution": self.resolution, "memory_bytes": self.memory_bytes,
-            "time_ms": self.time_ms, "mismatch": self.mismatch, "mean_abs_error": self.mean_error,
-        })
-    }
-}
+/// The time ratios the CPU run checks: `(a, b, target)` for `a`'s time at most `target`
+/// times `b`'s.
+const CPU_TIME_TARGETS: [(&str, &str, f64); 3] = [
+    ("cascaded", "sm", CASCADED_TIME_TARGET),
+    ("msm", "vsm", MSM_TIME_TARGET),
+    ("lispsm", "sm", LISPSM_TIME_TARGET),
+];
 
 /// The parameter that sizes a technique's memory, if it has one.
 fn sizing_key(t: &dyn ShadowTechnique) -> Option<&'static str> {
@@ -150,24 +135,66 @@ fn fitting_side(
     Ok(Ok(lo))
 }
 
-/// Renders `t` on `frame`: median time of `repeat` runs after an untimed one, the result.
-fn timed(
+/// A frame's GPU time: the sum of its stats' `gpu_*_ms` timestamp counters.
+pub fn gpu_ms(stats: &techniques::Stats) -> f64 {
+    stats
+        .counters
+        .iter()
+        .filter(|(k, _)| k.starts_with("gpu_") && k.ends_with("_ms"))
+        .map(|(_, v)| v)
+        .sum()
+}
+
+/// Renders `t` on `frame`: median time of `repeat` runs after an untimed one (wall time,
+/// or with `gpu_time` the frames' GPU time), the result.
+pub fn timed(
     t: &mut dyn ShadowTechnique,
     frame: &Frame,
     repeat: usize,
+    gpu_time: bool,
 ) -> Result<(f64, techniques::Shadows)> {
     t.render(frame)?;
-    let (ms, r) = median_ms(repeat, || t.render(frame));
-    Ok((ms, r?))
+    if !gpu_time {
+        let (ms, r) = median_ms(repeat, || t.render(frame));
+        return Ok((ms, r?));
+    }
+    let mut times = Vec::new();
+    let mut last = t.render(frame)?;
+    times.push(gpu_ms(&last.stats));
+    for _ in 1..repeat.max(1) {
+        last = t.render(frame)?;
+        times.push(gpu_ms(&last.stats));
+    }
+    times.sort_by(f64::total_cmp);
+    Ok((times[times.len() / 2], last))
+}
+
+/// The scenes, budgets, frame size and runs per measurement of a run.
+pub fn plan(a: &BenchConfig) -> (&'static [&'static str], &'static [u64], (u32, u32), usize) {
+    if a.quick {
+        (&QUICK_SCENES, &[4], (512, 384), 1)
+    } else {
+        (&SCENES, &BUDGETS_MIB, (1024, 768), a.repeat)
+    }
 }
 
 /// Runs the suite.
 pub fn run(a: &BenchConfig) -> Result<BenchReport> {
-    let (scenes, budgets, size, repeat): (&[&str], &[u64], (u32, u32), usize) = if a.quick {
-        (&QUICK_SCENES, &[4], (512, 384), 1)
-    } else {
-        (&SCENES, &BUDGETS_MIB, (1024, 768), a.repeat)
-    };
+    let rows = measure(a, Backend::CPU)?;
+    let (scenes, budgets, _, _) = plan(a);
+    summary(&rows, budgets, &CPU_TIME_TARGETS);
+    if let Some(dir) = &a.plots {
+        super::engines_rows::write_plots(dir, &rows, scenes, budgets, Backend::CPU)?;
+    }
+    Ok(BenchReport {
+        rows: rows.iter().map(Row::json).collect(),
+    })
+}
+
+/// Measures every technique of `backend` on the run's scenes at its budgets, printing a
+/// table per scene; the rows.
+pub fn measure(a: &BenchConfig, backend: Backend) -> Result<Vec<Row>> {
+    let (scenes, budgets, size, repeat) = plan(a);
     println!(
         "engines: every technique at equal shadow memory ({} MiB); {}x{}, {} threads; times are medians of {repeat} runs; reference 1 ray per pixel",
         budgets.iter().map(|b| b.to_string()).collect::<Vec<_>>().join(", "),
@@ -200,25 +227,20 @@ pub fn run(a: &BenchConfig) -> Result<BenchReport> {
             "{:>10} {:>7} {:>6} {:>10} {:>10} {:>9} {:>9}",
             "technique", "budget", "res", "memory", "time ms", "mismatch", "mean err"
         );
-        let pb = crate::progress::bar(techniques::ALL.len() as u64, name.to_string());
+        let pb = crate::progress::bar(backend.names.len() as u64, name.to_string());
         let on = OnScene {
             name,
             frame: &frame,
             reference: &reference,
+            gpu_time: backend.gpu_time,
         };
-        for &tname in techniques::ALL {
+        for &tname in backend.names {
             measure_technique(&on, tname, budgets, repeat, &pb, &mut rows)?;
             pb.inc(1);
         }
         pb.finish_and_clear();
     }
-    summary(&rows, budgets);
-    if let Some(dir) = &a.plots {
-        write_plots(dir, &rows, scenes, budgets)?;
-    }
-    Ok(BenchReport {
-        rows: rows.iter().map(Row::json).collect(),
-    })
+    Ok(rows)
 }
 
 /// What a scene's measurements share: the frame and its reference.
@@ -226,6 +248,8 @@ struct OnScene<'a> {
     name: &'a str,
     frame: &'a Frame<'a>,
     reference: &'a Visibility,
+    /// Time by the GPU's timestamps.
+    gpu_time: bool,
 }
 
 /// Prints that `tname` is left out at `budget` MiB because its memory does not fit.
@@ -287,7 +311,7 @@ fn measure_technique(
                 t.set_param("budget-mb", &b.to_string())?;
             }
         }
-        let (ms, out) = timed(t.as_mut(), frame, repeat)?;
+        let (ms, out) = timed(t.as_mut(), frame, repeat, on.gpu_time)?;
         if let Some(b) = b.filter(|&b| out.stats.memory_bytes > b << 20) {
             not_fitting(
                 pb,
@@ -331,7 +355,7 @@ fn mib(bytes: u64) -> String {
 }
 
 /// The row of `technique` on `scene` at `budget`.
-fn find<'r>(rows: &'r [Row], scene: &str, technique: &str, budget: u64) -> Option<&'r Row> {
+pub fn find<'r>(rows: &'r [Row], scene: &str, technique: &str, budget: u64) -> Option<&'r Row> {
     rows.iter()
         .find(|r| r.scene == scene && r.technique == technique && r.budget_mib == Some(budget))
 }
@@ -339,18 +363,14 @@ fn find<'r>(rows: &'r [Row], scene: &str, technique: &str, budget: u64) -> Optio
 /// Prints the targets' ratios, each with its target and whether it is met: for the time
 /// ratios the median and the worst over the scene × budget pairs of the run (on a loaded
 /// machine one slow repetition can make the worst, so both are shown).
-fn summary(rows: &[Row], budgets: &[u64]) {
+pub fn summary(rows: &[Row], budgets: &[u64], targets: &[(&str, &str, f64)]) {
     println!();
     let scenes: Vec<&str> = {
         let mut s: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
         s.dedup();
         s
     };
-    for (a, b, target) in [
-        ("cascaded", "sm", CASCADED_TIME_TARGET),
-        ("msm", "vsm", MSM_TIME_TARGET),
-        ("lispsm", "sm", LISPSM_TIME_TARGET),
-    ] {
+    for &(a, b, target) in targets {
         let mut ratios: Vec<f64> = Vec::new();
         for s in &scenes {
             for &bud in budgets {
@@ -395,104 +415,9 @@ fn verdict(ok: bool) -> &'static str {
     }
 }
 
-/// Indices of the rows on the Pareto front of (time, error): no other row is at least as
-/// fast and at least as accurate, and better in one.
-fn pareto(points: &[(f64, f64)]) -> Vec<bool> {
-    points
-        .iter()
-        .map(|&(t, e)| {
-            !points
-                .iter()
-                .any(|&(t2, e2)| t2 <= t && e2 <= e && (t2 < t || e2 < e))
-        })
-        .collect()
-}
-
-/// Per scene: mean error against memory (a line per technique) and, at the middle budget,
-/// error against time with the Pareto front marked.
-fn write_plots(
-    dir: &std::path::Path,
-    rows: &[Row],
-    scenes: &[&str],
-    budgets: &[u64],
-) -> Result<()> {
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("cannot create --plots folder {}", dir.display()))?;
-    for &s in scenes {
-        let series: Vec<Series> = techniques::ALL
-            .iter()
-            .map(|&t| Series {
-                name: t.to_string(),
-                points: rows
-                    .iter()
-                    .filter(|r| r.scene == s && r.technique == t)
-                    .map(|r| {
-                        (
-                            r.memory_bytes.max(1) as f64 / (1u64 << 20) as f64,
-                            r.mean_error,
-                        )
-                    })
-                    .collect(),
-            })
-            .filter(|se| !se.points.is_empty())
-            .collect();
-        let mem: Vec<f64> = series
-            .iter()
-            .flat_map(|se| se.points.iter().map(|p| p.0))
-            .collect();
-        let svg = charts::lines(
-            &format!("{s}: error against memory"),
-            &Axis::auto("shadow memory (MiB)", &mem, 8.0),
-            &Axis::linear("mean absolute error (visibility, 0–1)"),
-            &series,
-        )?;
-        let file = dir.join(format!("engines-{s}-error-vs-memory.svg"));
-        crate::output::write_file(&file, svg.as_bytes())?;
-        let mid = budgets[budgets.len() / 2];
-        let at: Vec<&Row> = rows
-            .iter()
-            .filter(|r| r.scene == s && (r.budget_mib == Some(mid) || r.budget_mib.is_none()))
-            .collect();
-        let front = pareto(
-            &at.iter()
-                .map(|r| (r.time_ms, r.mean_error))
-                .collect::<Vec<_>>(),
-        );
-        let points: Vec<Point> = at
-            .iter()
-            .zip(&front)
-            .map(|(r, &f)| Point {
-                label: if f {
-                    format!("{} ◆ Pareto", r.technique)
-                } else {
-                    r.technique.clone()
-                },
-                x: r.time_ms,
-                y: r.mean_error,
-            })
-            .collect();
-        let times: Vec<f64> = points.iter().map(|p| p.x).collect();
-        let svg = charts::scatter(
-            &format!("{s}: error against time at {mid} MiB (◆ marks the Pareto front)"),
-            &Axis::auto("frame time of the technique (ms)", &times, 10.0),
-            &Axis::linear("mean absolute error (visibility, 0–1)"),
-            &points,
-        )?;
-        let file = dir.join(format!("engines-{s}-error-vs-time.svg"));
-        crate::output::write_file(&file, svg.as_bytes())?;
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn pareto_front_keeps_only_undominated_points() {
-        let p = [(1.0, 0.5), (2.0, 0.2), (3.0, 0.3), (0.5, 0.9), (2.0, 0.2)];
-        assert_eq!(pareto(&p), vec![true, true, false, true, true]);
-    }
 
     #[test]
     fn resolutions_fit_the_budget() {

@@ -8,6 +8,8 @@ pub mod afsm_scaling_gpu;
 pub mod asm_walkthrough;
 pub mod csm_table;
 pub mod engines;
+pub mod engines_gpu;
+pub mod engines_rows;
 pub mod gpu;
 pub mod psm_lights;
 pub mod soft_exact;

@@ -3,7 +3,7 @@
 //! `{"suite", "machine", "rows"}`.
 
 use crate::bench::{self, afsm_scaling, asm_walkthrough, csm_table, engines, psm_lights};
-use crate::bench::{gpu, soft_exact, subpixel_scaling, BenchReport};
+use crate::bench::{engines_gpu, gpu, soft_exact, subpixel_scaling, BenchReport};
 use crate::config::{BenchConfig, Suite};
 use crate::output;
 use anyhow::Result;
@@ -17,6 +17,7 @@ pub fn run(cfg: BenchConfig) -> Result<()> {
         Suite::CsmTable => csm_table::run(&cfg)?,
         Suite::AsmWalkthrough => asm_walkthrough::run(&cfg)?,
         Suite::PsmLights => psm_lights::run(&cfg)?,
+        Suite::Engines if cfg.gpu => engines_gpu::run(&cfg)?,
         Suite::Engines => engines::run(&cfg)?,
         Suite::SoftExact => soft_exact::run(&cfg)?,
         Suite::Gpu => gpu::run(&cfg)?,

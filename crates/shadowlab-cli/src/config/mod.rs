@@ -250,6 +250,8 @@ pub struct BenchConfig {
     pub repeat: usize,
     /// Where to write the suite's plots.
     pub plots: Option<PathBuf>,
+    /// `engines` measures the `gpu:` techniques.
+    pub gpu: bool,
 }
 
 impl BenchConfig {
@@ -263,6 +265,21 @@ impl BenchConfig {
                 a.suite,
                 names.join(", ")
             )));
+        };
+        let gpu = match a.backend.trim() {
+            "cpu" => false,
+            "gpu" if suite == Suite::Engines => true,
+            "gpu" => {
+                return Err(bad_input(format!(
+                    "--backend gpu applies to the engines suite, not {} (the gpu suite is already the GPU's)",
+                    a.suite
+                )))
+            }
+            other => {
+                return Err(bad_input(format!(
+                    "--backend {other:?} is neither cpu nor gpu"
+                )))
+            }
         };
         if !(1..=MAX_REPEAT).contains(&a.repeat) {
             return Err(bad_input(format!(
@@ -284,6 +301,7 @@ impl BenchConfig {
             quick: a.quick,
             repeat: a.repeat,
             plots: a.plots.clone(),
+            gpu,
         })
     }
 }

@@ -107,15 +107,7 @@ fn swept_value(t: &dyn ShadowTechnique, key: &str, text: &str) -> String {
 
 /// The technique names of `--techniques`.
 fn technique_names(a: &CompareArgs) -> Result<Vec<String>> {
-    let names: Vec<String> = if a.techniques.trim() == "all" {
-        techniques::ALL.iter().map(|s| s.to_string()).collect()
-    } else {
-        a.techniques
-            .split(',')
-            .map(|s| s.trim().to_string())
-            .filter(|s| !s.is_empty())
-            .collect()
-    };
+    let names = techniques::expand_names(&[&a.techniques]);
     if names.is_empty() {
         return Err(bad_input(format!(
             "--techniques {:?} names no technique",

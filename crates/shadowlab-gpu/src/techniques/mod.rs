@@ -2,6 +2,10 @@
 //! folders, and the registry that creates them by name.
 
 pub mod alias_free;
+pub mod cascaded;
+pub mod lispsm;
+mod maps;
+pub mod perspective;
 pub mod raytrace;
 pub mod shadow_map;
 
@@ -14,6 +18,9 @@ pub const ALL: &[&str] = &[
     shadow_map::PCF,
     raytrace::NAME,
     alias_free::NAME,
+    perspective::NAME,
+    lispsm::NAME,
+    cascaded::NAME,
 ];
 
 /// A GPU technique by name (`gpu:raytrace`, …), with the defaults of its CPU twin.
@@ -23,6 +30,9 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
         shadow_map::PCF => Box::new(shadow_map::GpuShadowMap::pcf()),
         raytrace::NAME => Box::new(raytrace::GpuRayTrace::default()),
         alias_free::NAME => Box::new(alias_free::GpuAliasFree::default()),
+        perspective::NAME => Box::new(perspective::GpuPsm::default()),
+        lispsm::NAME => Box::new(lispsm::GpuLispsm::default()),
+        cascaded::NAME => Box::new(cascaded::GpuCascaded::default()),
         _ => {
             return Err(Error::param(format!(
                 "unknown GPU technique {name:?}: the GPU techniques are {}",

@@ -71,6 +71,52 @@ pub fn extensions() -> Vec<Extension> {
     EXTENSIONS.read().unwrap_or_else(|e| e.into_inner()).clone()
 }
 
+/// The technique names a list names (its items may be comma-separated lists), in report
+/// order: `all` stands for [`ALL`] and
+/// `PREFIXall` (`gpu:all`) for every name of the registered extension with that prefix;
+/// other names stand for themselves; a name listed twice is kept once. When a name and
+/// an extension's twin of it (`sm` and `gpu:sm`) are both listed, the twin follows the
+/// name, so tables and reports show each pair side by side.
+pub fn expand_names<S: AsRef<str>>(list: &[S]) -> Vec<String> {
+    let exts = extensions();
+    let mut names: Vec<String> = Vec::new();
+    for item in list.iter().flat_map(|s| s.as_ref().split(',')) {
+        let item = item.trim();
+        let group: Vec<String> = if item == "all" {
+            ALL.iter().map(|s| s.to_string()).collect()
+        } else if let Some(e) = exts.iter().find(|e| item == format!("{}all", e.prefix)) {
+            e.names.iter().map(|s| s.to_string()).collect()
+        } else {
+            vec![item.to_string()]
+        };
+        for n in group {
+            if !n.is_empty() && !names.contains(&n) {
+                names.push(n);
+            }
+        }
+    }
+    let twin_of = |n: &str| -> Option<String> {
+        exts.iter()
+            .find_map(|e| n.strip_prefix(e.prefix))
+            .map(str::to_string)
+            .filter(|base| names.contains(base))
+    };
+    let mut out = Vec::with_capacity(names.len());
+    for n in &names {
+        if twin_of(n).is_some() {
+            continue;
+        }
+        out.push(n.clone());
+        for e in &exts {
+            let twin = format!("{}{n}", e.prefix);
+            if names.contains(&twin) {
+                out.push(twin);
+            }
+        }
+    }
+    out
+}
+
 /// A technique by name, with default parameters.
 pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
     if let Some(ext) = extensions()
@@ -119,6 +165,27 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
 mod tests {
     use super::technique::tests::significant_digits;
     use super::*;
+
+    #[test]
+    fn a_list_expands_all_and_puts_each_twin_after_its_name() {
+        fn made(name: &str) -> Result<Box<dyn ShadowTechnique>> {
+            create(name.trim_start_matches("twin:"))
+        }
+        register(Extension {
+            prefix: "twin:",
+            names: &["twin:psm", "twin:sm", "twin:only"],
+            create: made,
+        });
+        let names = expand_names(&["twin:all", "sm,", "all", "psm"]);
+        assert_eq!(names.len(), ALL.len() + 3, "{names:?}");
+        let at = |n: &str| names.iter().position(|x| x == n).unwrap();
+        assert_eq!(at("twin:sm"), at("sm") + 1);
+        assert_eq!(at("twin:psm"), at("psm") + 1);
+        // A twin without its CPU name keeps its place; the CPU names keep ALL's order.
+        assert_eq!(at("twin:only"), 0);
+        assert!(at("sm") < at("psm") && at("psm") < at("pcss"));
+        assert_eq!(expand_names(&["pcf", " sm "]), ["pcf", "sm"]);
+    }
 
     /// The parameter table is what `set_param` validates against and what the command line
     /// lists: it must name exactly the parameters `params` reports, in the same order, and

@@ -55,12 +55,12 @@ const WORKGROUP: u32 = 64;
 /// `FaceU` of `depth.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct FaceU {
-    clip_from_world: [f32; 16],
-    light_from_world: [f32; 16],
-    depth_scale: f32,
-    masks: u32,
-    pad: [u32; 2],
+pub(crate) struct FaceU {
+    pub(crate) clip_from_world: [f32; 16],
+    pub(crate) light_from_world: [f32; 16],
+    pub(crate) depth_scale: f32,
+    pub(crate) masks: u32,
+    pub(crate) pad: [u32; 2],
 }
 
 /// `ViewU` of `lookup.wgsl`.
@@ -90,7 +90,7 @@ struct LookupParams {
 }
 
 /// The depth a view's linear depths are divided by before they are stored: its far plane.
-fn depth_scale(v: &LightView) -> f32 {
+pub(crate) fn depth_scale(v: &LightView) -> f32 {
     if v.far.is_finite() && v.far > 0.0 {
         v.far
     } else {
@@ -175,7 +175,7 @@ impl GpuShadowMap {
 
 /// The depth stage's render pipeline: no colour target, a 32-bit float depth written by
 /// the fragment, the nearest kept (`Less`), both faces drawn.
-fn depth_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
+pub(crate) fn depth_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
     DEPTH.depth_tested_pipeline(device, &[])
 }
 

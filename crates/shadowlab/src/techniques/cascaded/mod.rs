@@ -190,7 +190,7 @@ impl Cascaded {
         }
         let f = cam.forward();
         let view = frame.view;
-        let (lo, hi) = (0..view.position.len())
+        let lit = (0..view.position.len())
             .into_par_iter()
             .with_min_len(4096)
             .filter(|&k| frame.receiver_lit(k))
@@ -202,17 +202,35 @@ impl Cascaded {
                 || (f32::INFINITY, f32::NEG_INFINITY),
                 |a, b| (a.0.min(b.0), a.1.max(b.1)),
             );
-        if !(lo.is_finite() && hi.is_finite()) || hi <= lo {
-            return camera;
-        }
-        // A little room so the extreme receivers are inside their slices.
-        let pad = (hi - lo) * fit::DEPTH_PAD;
-        ((lo - pad).max(cam.near), hi + pad)
+        sdsm_interval(frame, lit)
     }
 
     /// The cascades of a frame lit by a directional light towards `to_light`.
     pub fn build(&self, frame: &Frame, to_light: Vec3, stats: &mut Stats) -> Vec<Cascade> {
-        let (near, far) = self.depth_interval(frame);
+        let views = self.views(frame, to_light, self.depth_interval(frame), stats);
+        let res = self.resolved_cascade_resolution();
+        stats.stage("shadow_map", || {
+            views
+                .into_iter()
+                .map(|(d0, d1, view)| Cascade {
+                    slice: (d0, d1),
+                    map: render_depth_map(frame.scene, &view, res),
+                    view,
+                })
+                .collect()
+        })
+    }
+
+    /// Each cascade's view depth slice and light view, over the view depth interval
+    /// `(near, far)`, before any map is drawn (the GPU twin draws them itself); the split
+    /// planes are counted in `stats`.
+    pub fn views(
+        &self,
+        frame: &Frame,
+        to_light: Vec3,
+        (near, far): (f32, f32),
+        stats: &mut Stats,
+    ) -> Vec<(f32, f32, LightView)> {
         let planes = splits::practical_splits(near, far, self.cascades, self.lambda);
         let res = self.resolved_cascade_resolution();
         let basis = fit::light_basis(to_light, &frame.scene.bounds);
@@ -238,16 +256,7 @@ impl Cascaded {
         for (i, p) in planes.iter().enumerate() {
             stats.count(&format!("split{i}"), *p as f64);
         }
-        stats.stage("shadow_map", || {
-            views
-                .into_iter()
-                .map(|(d0, d1, view)| Cascade {
-                    slice: (d0, d1),
-                    map: render_depth_map(frame.scene, &view, res),
-                    view,
-                })
-                .collect()
-        })
+        views
     }
 
     /// The lit fraction of receiver `k` read from cascade `c`.
@@ -326,6 +335,18 @@ impl Cascaded {
         s.stats.count("single_map_fallback", 1.0);
         Ok(s)
     }
+}
+
+/// SDSM's view depth interval from the nearest and farthest view depth `(lo, hi)` of the
+/// lit receivers: padded a little so the extreme receivers are inside their slices, and
+/// the camera's near..far when there are none (`lo`, `hi` not finite, or `hi <= lo`).
+pub fn sdsm_interval(frame: &Frame, (lo, hi): (f32, f32)) -> (f32, f32) {
+    let cam = frame.camera;
+    if !(lo.is_finite() && hi.is_finite()) || hi <= lo {
+        return (cam.near, cam.far);
+    }
+    let pad = (hi - lo) * fit::DEPTH_PAD;
+    ((lo - pad).max(cam.near), hi + pad)
 }
 
 /// Colours of the cascades in the `--dump` overlay.

@@ -156,6 +156,20 @@ impl LightSpacePerspective {
     /// The warped map of a frame lit by a directional light towards `to_light`; `None`
     /// when the light reaches no receiver.
     pub fn build(&self, frame: &Frame, to_light: Vec3, res: u32) -> Option<WarpedMap> {
+        let (basis, warp, view) = self.fit(frame, to_light)?;
+        let map = render_depth_map(frame.scene, &view, res);
+        Some(WarpedMap {
+            basis,
+            warp,
+            view,
+            map,
+        })
+    }
+
+    /// The light basis, the fitted warp and the light view of the warped map of a frame
+    /// lit towards `to_light`, before any map is drawn (the GPU twin draws it itself);
+    /// `None` when the light reaches no receiver.
+    pub fn fit(&self, frame: &Frame, to_light: Vec3) -> Option<(Mat4, warp::Warp, LightView)> {
         let scene = &frame.scene.bounds;
         let origin = scene.center() + to_light.normalize() * scene.diagonal().max(1e-6);
         let (basis, sin_gamma) = warp::light_frame(to_light, frame.camera.forward(), origin);
@@ -198,13 +212,7 @@ impl LightSpacePerspective {
             ext.depth.1 as f32,
             0.0,
         );
-        let map = render_depth_map(frame.scene, &view, res);
-        Some(WarpedMap {
-            basis,
-            warp: w,
-            view,
-            map,
-        })
+        Some((basis, w, view))
     }
 
     fn lookup(&self, frame: &Frame, m: &WarpedMap) -> Vec<Vec3> {

@@ -49,6 +49,8 @@ pub(super) struct MapFit {
     pub(super) texel: f64,
     /// Distance of the near plane from `q` (0 for orthographic maps).
     pub(super) near: f64,
+    /// Far minus near plane.
+    pub(super) span: f64,
     /// True for a map along a post-space directional light.
     pub(super) orthographic: bool,
 }
@@ -152,6 +154,7 @@ fn fit_orthographic(dir: DVec3, centre: DVec3, pts: &[DVec3], res: u32) -> MapFi
         depth_row: depth,
         texel: 2.0 * hx.max(hy) / res as f64,
         near: 0.0,
+        span: far - near,
         orthographic: true,
     }
 }
@@ -287,6 +290,7 @@ fn perspective_map(
         depth_row: depth,
         texel: 2.0 * hx.max(hy) / res as f64,
         near,
+        span: far - near,
         orthographic: false,
     }
 }

@@ -127,7 +127,7 @@ use crate::light::Light;
 use crate::math::{Mat4, Vec3, Vec4};
 use crate::raster::{DepthBuffer, NO_TRIANGLE};
 use near_plane::Receivers;
-use post_map::PostMap;
+pub use post_map::PostMap;
 use post_space::{PostBody, PostLightSource, VirtualCamera};
 use std::collections::BTreeMap;
 
@@ -165,22 +165,37 @@ impl Default for Perspective {
 }
 
 /// The frame's geometry, ready to rasterize.
-struct Setup {
-    post: PostSpace,
+#[derive(Clone, Debug)]
+pub struct Setup {
+    /// The post-perspective space.
+    pub post: PostSpace,
     /// The post-space light position `q` (unused for directional lights).
-    q: Vec3,
+    pub q: Vec3,
     /// Unit direction towards a directional post-space light.
-    dir: Vec3,
+    pub dir: Vec3,
     /// Transposed inverse of `post_from_world`: maps world planes to post planes.
-    post_planes: Mat4,
+    pub post_planes: Mat4,
     /// The virtual camera's clip `w` (its view depth) as a row on world points.
-    w_row: Vec4,
+    pub w_row: Vec4,
     /// Depth (along the view axis from the virtual eye) below which triangles are clipped
     /// (−∞ for an orthographic view: nothing is).
-    clip_depth: f32,
-    maps: Vec<PostMap>,
+    pub clip_depth: f32,
+    /// The maps, their depths still empty until the map is drawn.
+    pub maps: Vec<PostMap>,
     /// For a cube: map index of each of the six faces (`usize::MAX` when skipped).
-    cube: Option<[usize; 6]>,
+    pub cube: Option<[usize; 6]>,
+}
+
+/// What one frame of `psm` is drawn from ([`Perspective::plan`]).
+#[derive(Clone, Debug)]
+pub enum Plan {
+    /// The light reaches no receiver: every covered pixel is dark.
+    NoReceivers,
+    /// No post-space map fits the frame: a uniform shadow map with the same resolution
+    /// and biases stands in.
+    Uniform,
+    /// The post-perspective maps.
+    Maps(Box<Setup>),
 }
 
 impl ShadowTechnique for Perspective {
@@ -266,6 +281,21 @@ impl ShadowTechnique for Perspective {
 }
 
 impl Perspective {
+    /// What this frame's maps are drawn from, before any is drawn (the GPU twin draws them
+    /// itself): the same receivers, body, virtual camera, post-space light and fits as
+    /// [`ShadowTechnique::render`].
+    pub fn plan(&self, frame: &Frame) -> Result<Plan> {
+        let res = check_resolution("psm", self.resolution)?;
+        frame.light.validate()?;
+        let Some(receivers) = Receivers::gather(frame) else {
+            return Ok(Plan::NoReceivers);
+        };
+        Ok(match build_setup(frame, &receivers, res) {
+            Some(s) => Plan::Maps(Box::new(s)),
+            None => Plan::Uniform,
+        })
+    }
+
     /// The post-perspective space this technique would build for `frame` (the body, the
     /// virtual shift and the light's case), without rendering a map; `None` when no receiver
     /// can be lit or no post-space map fits (the technique then falls back to a uniform map).

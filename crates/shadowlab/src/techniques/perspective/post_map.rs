@@ -28,21 +28,24 @@ pub const CLIP_DEPTH_FRACTION: f32 = 0.5;
 
 /// One post-perspective shadow map.
 #[derive(Clone, Debug)]
-pub(super) struct PostMap {
+pub struct PostMap {
     /// World to the map's clip space up to the positive factor `w_p` (the virtual camera's
     /// clip `w`): `clip_from_post · post_from_world`, composed in f64.
-    clip_from_world: Mat4,
+    pub clip_from_world: Mat4,
     /// The post-space linear depth beyond the near plane times `w_p`, as a row on
     /// homogeneous world points.
-    depth_world: Vec4,
+    pub depth_world: Vec4,
     /// Texel size in post units: absolute (orthographic) or per unit distance from `q`.
-    texel: f32,
+    pub texel: f32,
     /// Distance of the near plane from `q` (0 for orthographic maps).
-    near: f32,
+    pub near: f32,
+    /// The map's depth range, far minus near plane: the linear depths of what the map
+    /// holds lie in `0..span`.
+    pub span: f32,
     /// True for a map along a post-space directional light.
-    orthographic: bool,
+    pub orthographic: bool,
     /// Stored depths (negated for inverted lights), `+inf` where empty.
-    pub(super) depth: Vec<f32>,
+    pub depth: Vec<f32>,
 }
 
 impl PostMap {
@@ -53,6 +56,7 @@ impl PostMap {
             depth_world: (post_from_world.transpose() * fit.depth_row).as_vec4(),
             texel: fit.texel as f32,
             near: fit.near as f32,
+            span: fit.span as f32,
             orthographic: fit.orthographic,
             depth: Vec::new(),
         }
@@ -62,7 +66,7 @@ impl PostMap {
     /// virtual-camera `w` has reciprocal `inv_wp`: the one formula for map vertices and
     /// receivers alike.
     #[inline]
-    pub(super) fn transform(&self, p: Vec4, inv_wp: f32) -> (Vec4, f32) {
+    pub fn transform(&self, p: Vec4, inv_wp: f32) -> (Vec4, f32) {
         (
             self.clip_from_world * p * inv_wp,
             self.depth_world.dot(p) * inv_wp,
@@ -71,7 +75,7 @@ impl PostMap {
 
     /// Post-space size of one texel at linear depth `depth` (beyond the near plane).
     #[inline]
-    pub(super) fn texel_size(&self, depth: f32) -> f32 {
+    pub fn texel_size(&self, depth: f32) -> f32 {
         if self.orthographic {
             self.texel
         } else {

@@ -1,0 +1,197 @@
+//! `gpu:lispsm`: light-space perspective shadow maps (Wimmer, Scherzer & Purgathofer 2004)
+//! on the GPU, twin of the library's `lispsm`: the same parameters, meanings and defaults.
+//!
+//! The warp is fitted on the CPU by the library's own fit (`LightSpacePerspective::fit`:
+//! the lit receivers' light-space extent, the paper's `n_opt` or the given `n`, the
+//! window); it is a handful of numbers a frame. Stage `depth` (`gpu:sm`'s `depth.wgsl`):
+//! the hardware rasterizer draws the scene through the warped light view, storing the
+//! linear light depth over the view's far plane. Stage `lookup` (`lookup.wgsl`): a compute
+//! pass over the camera pass's samples projects each through the warp, subtracts `sm`'s
+//! bias in texels of the warped map at the receiver, and compares (nearest texel, or PCF
+//! with hardware 2×2 comparisons). Spot and point lights take the CPU's fallback, `sm`'s
+//! map (here `gpu:sm`'s, or `gpu:pcf`'s with a kernel), counted as `single_map_fallback`.
+//!
+//! Departures from the CPU twin: `gpu:sm`'s (the hardware rasterizer's rounding, depths
+//! stored over the far plane, the adapter's bilinear weight precision under PCF), and the
+//! texel size at the receiver evaluated in f32 where the CPU uses f64.
+
+use super::maps::{self, MapScene};
+use super::shadow_map::{depth_scale, GpuShadowMap};
+use crate::shader::{Stage, LIGHT, MAP_COMPARE, RAY_OFFSET};
+use crate::transfer::{uniform, Timer};
+use crate::upload::LightU;
+use bytemuck::{Pod, Zeroable};
+use shadowlab::error::Result;
+use shadowlab::light::Light;
+use shadowlab::techniques::lispsm::LightSpacePerspective;
+use shadowlab::techniques::shadow_map::{check_light_map_size, check_resolution};
+use shadowlab::techniques::{Frame, ParamSpec, ShadowTechnique, Shadows, Stats};
+use std::collections::BTreeMap;
+
+/// `gpu:lispsm`'s name.
+pub const NAME: &str = "gpu:lispsm";
+
+const LOOKUP: Stage = Stage {
+    name: "lispsm/lookup.wgsl",
+    common: &[RAY_OFFSET, LIGHT, MAP_COMPARE],
+    source: include_str!("lookup.wgsl"),
+};
+
+/// `Params` of `lookup.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct Params {
+    clip_from_world: [f32; 16],
+    light_from_world: [f32; 16],
+    light: LightU,
+    count: u32,
+    row: u32,
+    res: u32,
+    kernel: u32,
+    bias: f32,
+    slope_bias: f32,
+    depth_scale: f32,
+    eye_y: f32,
+    texel_x: f32,
+    texel_y: f32,
+    pad: [u32; 2],
+}
+
+/// Light-space perspective shadow maps on the GPU; the CPU `lispsm`'s parameters.
+#[derive(Default)]
+pub struct GpuLispsm {
+    cpu: LightSpacePerspective,
+    scene: Option<MapScene>,
+}
+
+impl GpuLispsm {
+    /// The CPU's fallback for spot and point lights on the GPU: `gpu:sm`'s map, or
+    /// `gpu:pcf`'s with the kernel.
+    fn fallback(&self, frame: &Frame) -> Result<Shadows> {
+        let mut sm = fallback_map(
+            self.cpu.kernel,
+            self.cpu.resolution,
+            self.cpu.bias,
+            self.cpu.slope_bias,
+        )?;
+        let mut s = sm.render(frame)?;
+        s.stats.count("single_map_fallback", 1.0);
+        Ok(s)
+    }
+}
+
+/// `gpu:sm` (kernel 0) or `gpu:pcf` with these parameters: the single map the CPU's
+/// warped and split maps fall back to under spot and point lights.
+pub(crate) fn fallback_map(
+    kernel: u32,
+    resolution: u32,
+    bias: f32,
+    slope_bias: f32,
+) -> Result<GpuShadowMap> {
+    let mut sm = if kernel > 0 {
+        GpuShadowMap::pcf()
+    } else {
+        GpuShadowMap::standard()
+    };
+    sm.set_param("resolution", &resolution.to_string())?;
+    sm.set_param("bias", &bias.to_string())?;
+    sm.set_param("slope-bias", &slope_bias.to_string())?;
+    if kernel > 0 {
+        sm.set_param("kernel", &kernel.to_string())?;
+    }
+    Ok(sm)
+}
+
+impl ShadowTechnique for GpuLispsm {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn params(&self) -> BTreeMap<String, serde_json::Value> {
+        self.cpu.params()
+    }
+
+    fn param_specs(&self) -> Vec<ParamSpec> {
+        self.cpu.param_specs()
+    }
+
+    fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
+        crate::twin::set_twin_param(NAME, &mut self.cpu, key, value)
+    }
+
+    fn render(&mut self, frame: &Frame) -> Result<Shadows> {
+        let res = check_resolution(NAME, self.cpu.resolution)?;
+        let Light::Directional { to_light } = *frame.light else {
+            return self.fallback(frame);
+        };
+        check_light_map_size(NAME, 1, res)?;
+        let mut stats = Stats::default();
+        let Some((basis, warp, view)) = stats.stage("fit", || self.cpu.fit(frame, to_light)) else {
+            return Ok(Shadows::of_frame(frame, maps::unreached(frame), stats));
+        };
+        let cpu = self.cpu.clone();
+        let ms = MapScene::keep(&mut self.scene, NAME, frame, &mut stats)?;
+        let gpu = ms.gpu.clone();
+        let texture = maps::depth_array(&gpu, NAME, &format!("{NAME}.resolution"), res, 1)?;
+        let mut timer = Timer::new(&gpu, 2);
+        stats.stage("shadow_map", || {
+            gpu.stage(NAME, "shadow_map", || {
+                maps::draw_views(ms, &texture, std::slice::from_ref(&view), frame, &mut timer)
+            })
+        })?;
+        let (count, row, _) = maps::lookup_grid(&gpu, frame);
+        let d = (warp.y.1 - warp.y.0).max(1e-12);
+        let k = 2.0 * (warp.n + d) / d;
+        let slope = if cpu.kernel > 0 {
+            cpu.slope_bias * (cpu.kernel / 2 + 1) as f32
+        } else {
+            cpu.slope_bias
+        };
+        let params = Params {
+            clip_from_world: view.clip_from_world.to_cols_array(),
+            light_from_world: basis.to_cols_array(),
+            light: LightU::of(frame.light),
+            count,
+            row,
+            res,
+            kernel: cpu.kernel,
+            bias: cpu.bias,
+            slope_bias: slope,
+            depth_scale: depth_scale(&view),
+            eye_y: warp.ey as f32,
+            texel_x: ((warp.x_window.1 - warp.x_window.0) / f64::from(res)) as f32,
+            texel_y: (2.0 / (k * warp.n * f64::from(res))) as f32,
+            pad: [0; 2],
+        };
+        let params = uniform(&gpu, "look-up parameters", &params);
+        let sampler = maps::comparison_sampler(&gpu);
+        let array = maps::array_view(&texture);
+        let value = maps::look_up(
+            ms,
+            NAME,
+            &LOOKUP,
+            &[
+                params.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&array),
+                wgpu::BindingResource::Sampler(&sampler),
+            ],
+            frame,
+            &mut timer,
+            &mut stats,
+        )?;
+        stats.memory_bytes = u64::from(res).pow(2) * 4;
+        stats.count("n", warp.n);
+        stats.count("map_texels", f64::from(res).powi(2));
+        Ok(Shadows::of_frame(frame, value, stats))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mirrored_structs_have_the_wgsl_sizes() {
+        assert_eq!(std::mem::size_of::<Params>(), 224);
+    }
+}
