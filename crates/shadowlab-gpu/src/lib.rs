@@ -25,6 +25,8 @@
 //! camera_pass/              the GPU G-buffer (benchmarks, the viewer): gbuffer.wgsl
 //! shader.rs                 the include step composing shaders/common/*.wgsl into stages
 //! shaders/common/*.wgsl     written once: watertight test, ray offset, light, alpha masks
+//! techniques/maps.rs        what the warped and split maps share: layers of one depth
+//!                           array drawn by the rasterizer, the look-up's dispatch
 //! techniques/<name>/        one folder per technique, mirroring the library's:
 //!   mod.rs                  the ShadowTechnique, its pipelines and dispatches
 //!   <stage>.wgsl            one file per stage, named after the stage it runs
