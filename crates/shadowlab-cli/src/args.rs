@@ -211,7 +211,7 @@ impl CompareArgs {
 /// `shadowlab techniques`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct TechniquesArgs {
-    /// One technique to describe (default: every technique).
+    /// One technique to describe, or `all` / `gpu:all` (default: every CPU technique).
     pub name: Option<String>,
 }
 

@@ -189,6 +189,12 @@ fn all_and_gpu_all_put_each_pair_side_by_side() {
         }
         assert_eq!(names.iter().filter(|x| *x == n).count(), 1, "{names:?}");
     }
+    // `techniques` lists what `all` and `gpu:all` stand for: every one of them ran.
+    let listed = run_ok(quiet().args(["techniques", "gpu:all"])).stdout;
+    for n in names.iter().filter(|n| n.starts_with("gpu:")) {
+        assert!(listed.contains(n.as_str()), "{n}: {listed}");
+    }
+    assert!(!listed.contains("\nsm"), "{listed}");
 }
 
 #[test]

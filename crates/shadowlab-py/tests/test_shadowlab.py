@@ -94,6 +94,13 @@ def test_gpu_techniques_are_named_like_the_others():
     assert (sm != cpu).any(axis=2).mean() < 0.01
     with pytest.raises(sl.ShadowlabError, match="gpu:sm"):
         scene.render("gpu:sm", CAMERA, SUN, params={"no-such-key": 1})
+    # "gpu:all" expands as in `compare --techniques`, each GPU twin right after its CPU
+    # technique.
+    m = scene.compare(["gpu:all", "sm", "psm"], CAMERA, SUN)
+    names = [r["technique"] for r in m["results"]]
+    assert names[names.index("sm") + 1] == "gpu:sm"
+    assert names[names.index("psm") + 1] == "gpu:psm"
+    assert {"gpu:lispsm", "gpu:cascaded", "gpu:raytrace"} <= set(names)
 
 
 def test_nan_vertices_raise_the_library_sentence():

@@ -178,12 +178,15 @@ pub struct TechniquesConfig {
 }
 
 impl TechniquesConfig {
-    /// Every technique, or the one named (which must exist).
+    /// Every technique, or those named (`all`, `gpu:all` or one name, which must exist).
     pub fn from_args(a: &TechniquesArgs) -> Result<Self> {
         let names = match &a.name {
             Some(n) => {
-                techniques::create(n)?;
-                vec![n.clone()]
+                let names = techniques::expand_names(&[n]);
+                for n in &names {
+                    techniques::create(n)?;
+                }
+                names
             }
             None => techniques::ALL.iter().map(|s| s.to_string()).collect(),
         };

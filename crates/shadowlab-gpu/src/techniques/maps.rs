@@ -196,7 +196,6 @@ pub(crate) fn lookup_grid(gpu: &Gpu, frame: &Frame) -> (u32, u32, (u32, u32)) {
 /// Runs `stage`'s `main` over the frame's pixels with `resources` at bindings 0, 1, …
 /// (the uploaded view samples and the output buffer appended last but one and last),
 /// then reads the shadow terms back and counts the timed stages and the device.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn look_up(
     ms: &MapScene,
     name: &str,

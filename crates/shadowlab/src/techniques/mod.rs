@@ -72,48 +72,51 @@ pub fn extensions() -> Vec<Extension> {
 }
 
 /// The technique names a list names (its items may be comma-separated lists), in report
-/// order: `all` stands for [`ALL`] and
-/// `PREFIXall` (`gpu:all`) for every name of the registered extension with that prefix;
-/// other names stand for themselves; a name listed twice is kept once. When a name and
-/// an extension's twin of it (`sm` and `gpu:sm`) are both listed, the twin follows the
-/// name, so tables and reports show each pair side by side.
+/// order: `all` stands for [`ALL`] and `PREFIXall` (`gpu:all`) for every name of the
+/// registered extension with that prefix; other names stand for themselves, as often as
+/// they are listed. When a name and an extension's twin of it (`sm` and `gpu:sm`) are both
+/// listed, the twin is moved right after the name, so tables and reports show each pair
+/// side by side; the result is the expanded list reordered, nothing added or dropped.
 pub fn expand_names<S: AsRef<str>>(list: &[S]) -> Vec<String> {
     let exts = extensions();
     let mut names: Vec<String> = Vec::new();
     for item in list.iter().flat_map(|s| s.as_ref().split(',')) {
         let item = item.trim();
-        let group: Vec<String> = if item == "all" {
-            ALL.iter().map(|s| s.to_string()).collect()
+        if item == "all" {
+            names.extend(ALL.iter().map(|s| s.to_string()));
         } else if let Some(e) = exts.iter().find(|e| item == format!("{}all", e.prefix)) {
-            e.names.iter().map(|s| s.to_string()).collect()
-        } else {
-            vec![item.to_string()]
-        };
-        for n in group {
-            if !n.is_empty() && !names.contains(&n) {
-                names.push(n);
-            }
+            names.extend(e.names.iter().map(|s| s.to_string()));
+        } else if !item.is_empty() {
+            names.push(item.to_string());
         }
     }
-    let twin_of = |n: &str| -> Option<String> {
+    let is_twin = |n: &str| {
         exts.iter()
-            .find_map(|e| n.strip_prefix(e.prefix))
-            .map(str::to_string)
-            .filter(|base| names.contains(base))
+            .filter_map(|e| n.strip_prefix(e.prefix))
+            .any(|base| names.iter().any(|x| x == base))
     };
+    let mut used = vec![false; names.len()];
     let mut out = Vec::with_capacity(names.len());
-    for n in &names {
-        if twin_of(n).is_some() {
+    for i in 0..names.len() {
+        if used[i] || is_twin(&names[i]) {
             continue;
         }
-        out.push(n.clone());
+        used[i] = true;
+        out.push(names[i].clone());
         for e in &exts {
-            let twin = format!("{}{n}", e.prefix);
-            if names.contains(&twin) {
+            let twin = format!("{}{}", e.prefix, names[i]);
+            if let Some(j) = (0..names.len()).find(|&j| !used[j] && names[j] == twin) {
+                used[j] = true;
                 out.push(twin);
             }
         }
     }
+    // Twins listed more often than their names keep their order at the end.
+    out.extend(
+        (0..names.len())
+            .filter(|&j| !used[j])
+            .map(|j| names[j].clone()),
+    );
     out
 }
 
@@ -176,15 +179,21 @@ mod tests {
             names: &["twin:psm", "twin:sm", "twin:only"],
             create: made,
         });
-        let names = expand_names(&["twin:all", "sm,", "all", "psm"]);
-        assert_eq!(names.len(), ALL.len() + 3, "{names:?}");
+        let names = expand_names(&["twin:all", "sm,", "all"]);
+        assert_eq!(names.len(), ALL.len() + 4, "{names:?}");
         let at = |n: &str| names.iter().position(|x| x == n).unwrap();
         assert_eq!(at("twin:sm"), at("sm") + 1);
         assert_eq!(at("twin:psm"), at("psm") + 1);
-        // A twin without its CPU name keeps its place; the CPU names keep ALL's order.
+        // A twin without its CPU name keeps its place; the CPU names keep their order,
+        // each as often as listed.
         assert_eq!(at("twin:only"), 0);
-        assert!(at("sm") < at("psm") && at("psm") < at("pcss"));
+        assert_eq!(names.iter().filter(|n| *n == "sm").count(), 2);
+        assert!(at("sm") < at("raytrace") && at("psm") < at("pcss"));
         assert_eq!(expand_names(&["pcf", " sm "]), ["pcf", "sm"]);
+        assert_eq!(
+            expand_names(&["twin:sm", "twin:sm", "sm"]),
+            ["sm", "twin:sm", "twin:sm"]
+        );
     }
 
     /// The parameter table is what `set_param` validates against and what the command line
