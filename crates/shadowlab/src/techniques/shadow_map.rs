@@ -84,6 +84,17 @@ impl LightMaps {
     }
 }
 
+/// The slope-scaled bias a look-up with PCF `kernel` (0 for none) applies: `slope_bias`,
+/// scaled by the kernel's reach (`kernel / 2 + 1` texels), since PCF compares the receiver
+/// with texels that far away.
+pub fn pcf_slope_bias(slope_bias: f32, kernel: u32) -> f32 {
+    if kernel > 0 {
+        slope_bias * (kernel / 2 + 1) as f32
+    } else {
+        slope_bias
+    }
+}
+
 /// Checks a shadow-map resolution before anything is allocated.
 pub fn check_resolution(technique: &str, res: u32) -> Result<u32> {
     if res == 0 || res > MAX_RASTER_SIDE {
@@ -315,11 +326,7 @@ impl ShadowTechnique for ShadowMap {
         let view = frame.view;
         let (w, h) = (view.width, view.height);
         let kernel = self.kernel;
-        let slope = if kernel > 0 {
-            self.slope_bias * (kernel / 2 + 1) as f32
-        } else {
-            self.slope_bias
-        };
+        let slope = pcf_slope_bias(self.slope_bias, kernel);
         let bias = self.bias;
         let value = stats.stage("lookup", || {
             (0..(w * h) as usize)

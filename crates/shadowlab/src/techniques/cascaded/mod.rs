@@ -289,11 +289,7 @@ impl Cascaded {
         let view = frame.view;
         let cam = frame.camera;
         let f = cam.forward();
-        let slope = if self.kernel > 0 {
-            self.slope_bias * (self.kernel / 2 + 1) as f32
-        } else {
-            self.slope_bias
-        };
+        let slope = crate::techniques::shadow_map::pcf_slope_bias(self.slope_bias, self.kernel);
         let bounds: Vec<f32> = std::iter::once(cascades[0].slice.0)
             .chain(cascades.iter().map(|c| c.slice.1))
             .collect();

@@ -218,11 +218,7 @@ impl LightSpacePerspective {
     fn lookup(&self, frame: &Frame, m: &WarpedMap) -> Vec<Vec3> {
         let view = frame.view;
         let res = m.map.width;
-        let slope = if self.kernel > 0 {
-            self.slope_bias * (self.kernel / 2 + 1) as f32
-        } else {
-            self.slope_bias
-        };
+        let slope = crate::techniques::shadow_map::pcf_slope_bias(self.slope_bias, self.kernel);
         (0..view.position.len())
             .into_par_iter()
             .with_min_len(1024)
