@@ -2,15 +2,44 @@
 //! bind groups of buffers by binding number, and shadow terms read back as RGB.
 
 use crate::device::Gpu;
-use crate::shader::Stage;
+use crate::shader::{Common, Stage};
 use shadowlab::math::Vec3;
+
+/// What the pipeline caches find a pipeline by: its stage's text (its own file and its
+/// common files, compared by content, so two stages may share a file name) and its entry
+/// point (`""` for a render pipeline's `vs` and `fs`).
+pub(crate) struct PipelineKey {
+    source: &'static str,
+    common: &'static [Common],
+    entry: String,
+}
+
+impl PipelineKey {
+    fn new(stage: &Stage, entry: &str) -> Self {
+        PipelineKey {
+            source: stage.source,
+            common: stage.common,
+            entry: entry.to_string(),
+        }
+    }
+
+    fn is(&self, stage: &Stage, entry: &str) -> bool {
+        self.entry == entry
+            && self.source == stage.source
+            && self.common.len() == stage.common.len()
+            && self
+                .common
+                .iter()
+                .zip(stage.common)
+                .all(|(a, b)| a.source == b.source)
+    }
+}
 
 /// The compute pipeline of `stage`'s entry point `entry`, with the layout its bindings
 /// imply: made once per device and kept.
 pub fn pipeline(gpu: &Gpu, stage: &Stage, entry: &str) -> wgpu::ComputePipeline {
-    let key = format!("{}:{entry}", stage.name);
     let mut made = gpu.compute.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some((_, p)) = made.iter().find(|(k, _)| *k == key) {
+    if let Some((_, p)) = made.iter().find(|(k, _)| k.is(stage, entry)) {
         return p.clone();
     }
     let module = stage.module(&gpu.device);
@@ -24,22 +53,23 @@ pub fn pipeline(gpu: &Gpu, stage: &Stage, entry: &str) -> wgpu::ComputePipeline 
             compilation_options: Default::default(),
             cache: None,
         });
-    made.push((key, p.clone()));
+    made.push((PipelineKey::new(stage, entry), p.clone()));
     p
 }
 
-/// The render pipeline named `name`, made by `make` once per device and kept.
+/// `stage`'s depth-tested render pipeline ([`Stage::depth_tested_pipeline`]) with the
+/// colour `targets`, made once per device and kept.
 pub fn render_pipeline(
     gpu: &Gpu,
-    name: &str,
-    make: impl FnOnce(&wgpu::Device) -> wgpu::RenderPipeline,
+    stage: &Stage,
+    targets: &[Option<wgpu::ColorTargetState>],
 ) -> wgpu::RenderPipeline {
     let mut made = gpu.render.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some((_, p)) = made.iter().find(|(k, _)| k == name) {
+    if let Some((_, p)) = made.iter().find(|(k, _)| k.is(stage, "")) {
         return p.clone();
     }
-    let p = make(&gpu.device);
-    made.push((name.to_string(), p.clone()));
+    let p = stage.depth_tested_pipeline(&gpu.device, targets);
+    made.push((PipelineKey::new(stage, ""), p.clone()));
     p
 }
 

@@ -15,6 +15,7 @@
 //! the same way. wgpu's default handler for errors outside a scope panics: it is replaced by
 //! one that records the message.
 
+use crate::compute::PipelineKey;
 use shadowlab::error::{Error, Result};
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -108,9 +109,9 @@ pub struct Gpu {
     faults: Arc<Mutex<Vec<String>>>,
     /// Compute pipelines made so far, by stage and entry point: a driver compiles each
     /// shader once per process (lavapipe's LLVM takes seconds for a large one).
-    pub(crate) compute: Mutex<Vec<(String, wgpu::ComputePipeline)>>,
-    /// Render pipelines made so far, by name.
-    pub(crate) render: Mutex<Vec<(String, wgpu::RenderPipeline)>>,
+    pub(crate) compute: Mutex<Vec<(PipelineKey, wgpu::ComputePipeline)>>,
+    /// Render pipelines made so far, by stage.
+    pub(crate) render: Mutex<Vec<(PipelineKey, wgpu::RenderPipeline)>>,
 }
 
 static SHARED: Mutex<Option<Arc<Gpu>>> = Mutex::new(None);

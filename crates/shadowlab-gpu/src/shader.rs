@@ -46,11 +46,18 @@ pub const TRIANGLES: Common = Common {
     source: include_str!("shaders/common/triangles.wgsl"),
 };
 
-/// `shaders/common/map_compare.wgsl`: the receiver bias, cube face, nearest-texel and PCF
-/// comparisons the warped and split maps' look-ups share (after [`RAY_OFFSET`]).
+/// `shaders/common/map_compare.wgsl`: the receiver bias, texel size, cube face,
+/// nearest-texel and PCF comparisons the map look-ups share (after [`RAY_OFFSET`]).
 pub const MAP_COMPARE: Common = Common {
     name: "map_compare.wgsl",
     source: include_str!("shaders/common/map_compare.wgsl"),
+};
+
+/// `shaders/common/map_pixels.wgsl`: the map look-ups' entry point over the camera pass's
+/// pixels, calling the stage's `shadow_term` (after [`LIGHT`]).
+pub const MAP_PIXELS: Common = Common {
+    name: "map_pixels.wgsl",
+    source: include_str!("shaders/common/map_pixels.wgsl"),
 };
 
 /// One pipeline stage's shader: the common files it needs and its own file.

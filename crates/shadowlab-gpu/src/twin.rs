@@ -21,6 +21,27 @@ pub fn set_twin_param(
     })
 }
 
+/// The parameter methods of a `ShadowTechnique` impl whose parameters are its CPU twin's,
+/// kept in the field `$cpu`: the twin's values and table, set through [`set_twin_param`]
+/// with errors naming the GPU technique (`self.name()`).
+macro_rules! twin_params {
+    ($cpu:ident) => {
+        fn params(&self) -> std::collections::BTreeMap<String, serde_json::Value> {
+            self.$cpu.params()
+        }
+
+        fn param_specs(&self) -> Vec<shadowlab::techniques::ParamSpec> {
+            self.$cpu.param_specs()
+        }
+
+        fn set_param(&mut self, key: &str, value: &str) -> shadowlab::error::Result<()> {
+            let name = self.name();
+            crate::twin::set_twin_param(name, &mut self.$cpu, key, value)
+        }
+    };
+}
+pub(crate) use twin_params;
+
 /// `text` with every `cpu.` that starts a word (a parameter's `TECHNIQUE.KEY`) spelled
 /// `gpu.` instead.
 fn renamed(text: &str, cpu: &str, gpu: &str) -> String {

@@ -71,12 +71,6 @@ pub struct GpuView {
     pub gpu_ms: Option<f64>,
 }
 
-fn pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
-    let targets: Vec<Option<wgpu::ColorTargetState>> =
-        TARGETS.iter().map(|&f| Some(f.into())).collect();
-    GBUFFER.depth_tested_pipeline(device, &targets)
-}
-
 fn target(gpu: &Gpu, camera: &Camera, format: wgpu::TextureFormat) -> wgpu::Texture {
     gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("gbuffer"),
@@ -114,7 +108,9 @@ pub fn render(
             gpu.limits.max_color_attachment_bytes_per_sample, gpu.adapter.name
         )));
     }
-    let pipe = render_pipeline(gpu, "gbuffer", pipeline);
+    let targets: Vec<Option<wgpu::ColorTargetState>> =
+        TARGETS.iter().map(|&f| Some(f.into())).collect();
+    let pipe = render_pipeline(gpu, &GBUFFER, &targets);
     let f = camera.forward();
     let cam = CameraU {
         clip_from_world: camera.clip_from_world().to_cols_array(),

@@ -7,7 +7,7 @@
 use crate::compute::{pipeline, render_pipeline, to_rgb};
 use crate::device::{shared, Gpu};
 use crate::shader::Stage;
-use crate::techniques::shadow_map::{depth_pipeline, depth_scale, FaceU};
+use crate::techniques::shadow_map::{depth_scale, FaceU, DEPTH};
 use crate::transfer::{grid, output, read_back, uniform, Timer};
 use crate::upload::{view_buffer, SceneBuffers, SceneKey};
 use shadowlab::error::{Error, Result};
@@ -148,7 +148,7 @@ pub(crate) fn draw_views(
     timer: &mut Timer,
 ) {
     let gpu = &ms.gpu;
-    let depth = render_pipeline(gpu, "depth", depth_pipeline);
+    let depth = render_pipeline(gpu, &DEPTH, &[]);
     let faces: Vec<wgpu::Buffer> = views
         .iter()
         .map(|v| {

@@ -1,4 +1,4 @@
-// What the warped and split maps' look-ups (gpu:psm, gpu:lispsm, gpu:cascaded) share: the
+// What the map look-ups (gpu:sm, gpu:pcf, gpu:psm, gpu:lispsm, gpu:cascaded) share: the
 // library's `receiver_bias` and `cube_face`, its nearest-texel test and PCF's kernel of
 // hardware 2×2 comparisons, on one layer of a depth array texture holding depths in the
 // stored units (the caller divides the receiver's depth likewise). Composed after
@@ -13,6 +13,15 @@ fn map_receiver_bias(texel: f32, n: vec3<f32>, l: vec3<f32>, bias: f32, slope: f
     let c = clamp(dot3(n, l), MAP_MIN_COSINE, 1.0);
     let t = min(sqrt(max(1.0 - c * c, 0.0)) / c, MAP_MAX_SLOPE);
     return texel * (bias + slope * t);
+}
+
+// A light view's texel size at light depth `depth`: its extent over the map side, times
+// the depth (no nearer than its near plane) for a perspective view.
+fn map_view_texel(extent: f32, near: f32, ortho: u32, depth: f32, res: u32) -> f32 {
+    if ortho == 0u {
+        return extent * max(depth, near) / f32(res);
+    }
+    return extent / f32(res);
 }
 
 // The library's `cube_face`: the major axis of `d`.

@@ -4,7 +4,7 @@
 // with hardware 2×2 comparisons), and across the band at its slice's far end blends
 // towards the next cascade's reading, as the CPU does. Every cascade is a layer of one
 // depth array texture. Composed after shaders/common/{ray_offset, light,
-// map_compare}.wgsl.
+// map_compare, map_pixels}.wgsl.
 
 struct CascadeU {
     clip_from_world: mat4x4<f32>,
@@ -44,9 +44,6 @@ struct Params {
 @group(0) @binding(4) var<storage, read> view: array<f32>;
 @group(0) @binding(5) var<storage, read_write> out: array<f32>;
 
-const VIEW_STRIDE: u32 = 10u;
-const NO_TRIANGLE: u32 = 0xffffffffu;
-
 // The lit fraction of receiver `p` read from cascade `i` (the CPU's `Cascaded::read`).
 fn read_cascade(i: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let c = cascades[i];
@@ -56,11 +53,7 @@ fn read_cascade(i: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let u = q.x * inv_w * 0.5 + 0.5;
     let v = 0.5 - q.y * inv_w * 0.5;
     let depth = -(c.light_from_world * h).z;
-    let nf = f32(params.res);
-    var texel = c.extent / nf;
-    if c.ortho == 0u {
-        texel = c.extent * max(depth, c.near) / nf;
-    }
+    let texel = map_view_texel(c.extent, c.near, c.ortho, depth, params.res);
     let l = shadow_ray(params.light, p).dir;
     let d = depth - map_receiver_bias(texel, n, l, params.bias, params.slope_bias);
     if !map_finite(u, v, d) {
@@ -84,27 +77,4 @@ fn shadow_term(p: vec3<f32>, n: vec3<f32>) -> f32 {
         lit += t * (read_cascade(i + 1u, p, n) - lit);
     }
     return lit;
-}
-
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.y * params.row + gid.x;
-    if k >= params.count {
-        return;
-    }
-    let b = k * VIEW_STRIDE;
-    let tri = bitcast<u32>(view[b + 9u]);
-    var s = 1.0;
-    if tri != NO_TRIANGLE {
-        let p = vec3<f32>(view[b], view[b + 1u], view[b + 2u]);
-        let n = vec3<f32>(view[b + 6u], view[b + 7u], view[b + 8u]);
-        if illuminates(params.light, p, n) {
-            s = shadow_term(p, n);
-        } else {
-            s = 0.0;
-        }
-    }
-    out[k * 3u] = s;
-    out[k * 3u + 1u] = s;
-    out[k * 3u + 2u] = s;
 }

@@ -23,20 +23,18 @@
 //! Spot and point lights take the CPU's fallback, one map (`gpu:sm`'s, or `gpu:pcf`'s with
 //! a kernel), counted as `single_map_fallback`.
 
-use super::lispsm::fallback_map;
 use super::maps::{self, MapScene};
-use super::shadow_map::depth_scale;
+use super::shadow_map::{depth_scale, GpuShadowMap};
 use crate::compute::{bind, pipeline};
-use crate::shader::{Stage, LIGHT, MAP_COMPARE, RAY_OFFSET};
+use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
 use crate::transfer::{read_back, storage, uniform, Timer};
 use crate::upload::{view_buffer, LightU};
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::Result;
 use shadowlab::light::{Light, LightView};
 use shadowlab::techniques::cascaded::{sdsm_interval, Cascaded, DepthBounds};
-use shadowlab::techniques::shadow_map::{check_light_map_size, check_resolution};
-use shadowlab::techniques::{Frame, ParamSpec, ShadowTechnique, Shadows, Stats};
-use std::collections::BTreeMap;
+use shadowlab::techniques::shadow_map::{check_light_map_size, check_resolution, pcf_slope_bias};
+use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Stats};
 use wgpu::util::DeviceExt;
 
 /// `gpu:cascaded`'s name.
@@ -50,7 +48,7 @@ const DEPTH_BOUNDS: Stage = Stage {
 
 const LOOKUP: Stage = Stage {
     name: "cascaded/lookup.wgsl",
-    common: &[RAY_OFFSET, LIGHT, MAP_COMPARE],
+    common: &[RAY_OFFSET, LIGHT, MAP_COMPARE, MAP_PIXELS],
     source: include_str!("lookup.wgsl"),
 };
 
@@ -189,26 +187,20 @@ impl ShadowTechnique for GpuCascaded {
         NAME
     }
 
-    fn params(&self) -> BTreeMap<String, serde_json::Value> {
-        self.cpu.params()
-    }
-
-    fn param_specs(&self) -> Vec<ParamSpec> {
-        self.cpu.param_specs()
-    }
-
-    fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
-        crate::twin::set_twin_param(NAME, &mut self.cpu, key, value)
-    }
+    crate::twin::twin_params!(cpu);
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
         let cpu = self.cpu.clone();
         check_resolution(NAME, cpu.resolution)?;
         let Light::Directional { to_light } = *frame.light else {
-            let mut sm = fallback_map(cpu.kernel, cpu.resolution, cpu.bias, cpu.slope_bias)?;
-            let mut s = sm.render(frame)?;
-            s.stats.count("single_map_fallback", 1.0);
-            return Ok(s);
+            return GpuShadowMap::fallback(
+                frame,
+                cpu.kernel,
+                cpu.resolution,
+                cpu.bias,
+                cpu.slope_bias,
+                "single_map_fallback",
+            );
         };
         let res = check_resolution(NAME, cpu.resolved_cascade_resolution())?;
         check_light_map_size(NAME, cpu.cascades, res)?;
@@ -243,11 +235,7 @@ impl ShadowTechnique for GpuCascaded {
         let table = storage(&gpu, "the cascades", bytemuck::cast_slice(&table))?;
         let (count, row, _) = maps::lookup_grid(&gpu, frame);
         let (eye, forward) = eye_forward(frame);
-        let slope = if cpu.kernel > 0 {
-            cpu.slope_bias * (cpu.kernel / 2 + 1) as f32
-        } else {
-            cpu.slope_bias
-        };
+        let slope = pcf_slope_bias(cpu.slope_bias, cpu.kernel);
         let params = LookupParams {
             light: LightU::of(frame.light),
             eye,

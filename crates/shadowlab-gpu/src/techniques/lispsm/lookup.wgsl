@@ -3,7 +3,7 @@
 // warped map at its light-space `y` (the larger of the texel's two sides: along `x` it
 // grows as y′, along `y` as y′², y′ = y − the warp's eye) and compares with the map,
 // nearest texel or PCF. Composed after shaders/common/{ray_offset, light,
-// map_compare}.wgsl.
+// map_compare, map_pixels}.wgsl.
 
 struct Params {
     clip_from_world: mat4x4<f32>,
@@ -33,9 +33,6 @@ struct Params {
 @group(0) @binding(3) var<storage, read> view: array<f32>;
 @group(0) @binding(4) var<storage, read_write> out: array<f32>;
 
-const VIEW_STRIDE: u32 = 10u;
-const NO_TRIANGLE: u32 = 0xffffffffu;
-
 fn shadow_term(p: vec3<f32>, n: vec3<f32>) -> f32 {
     let h = vec4<f32>(p, 1.0);
     let c = params.clip_from_world * h;
@@ -53,27 +50,4 @@ fn shadow_term(p: vec3<f32>, n: vec3<f32>) -> f32 {
     }
     let r = d / params.depth_scale;
     return map_compare(map, compare, 0u, params.res, params.kernel, u, v, r);
-}
-
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.y * params.row + gid.x;
-    if k >= params.count {
-        return;
-    }
-    let b = k * VIEW_STRIDE;
-    let tri = bitcast<u32>(view[b + 9u]);
-    var s = 1.0;
-    if tri != NO_TRIANGLE {
-        let p = vec3<f32>(view[b], view[b + 1u], view[b + 2u]);
-        let n = vec3<f32>(view[b + 6u], view[b + 7u], view[b + 8u]);
-        if illuminates(params.light, p, n) {
-            s = shadow_term(p, n);
-        } else {
-            s = 0.0;
-        }
-    }
-    out[k * 3u] = s;
-    out[k * 3u + 1u] = s;
-    out[k * 3u + 2u] = s;
 }

@@ -17,23 +17,22 @@
 
 use super::maps::{self, MapScene};
 use super::shadow_map::{depth_scale, GpuShadowMap};
-use crate::shader::{Stage, LIGHT, MAP_COMPARE, RAY_OFFSET};
+use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
 use crate::transfer::{uniform, Timer};
 use crate::upload::LightU;
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::Result;
 use shadowlab::light::Light;
 use shadowlab::techniques::lispsm::LightSpacePerspective;
-use shadowlab::techniques::shadow_map::{check_light_map_size, check_resolution};
-use shadowlab::techniques::{Frame, ParamSpec, ShadowTechnique, Shadows, Stats};
-use std::collections::BTreeMap;
+use shadowlab::techniques::shadow_map::{check_light_map_size, check_resolution, pcf_slope_bias};
+use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Stats};
 
 /// `gpu:lispsm`'s name.
 pub const NAME: &str = "gpu:lispsm";
 
 const LOOKUP: Stage = Stage {
     name: "lispsm/lookup.wgsl",
-    common: &[RAY_OFFSET, LIGHT, MAP_COMPARE],
+    common: &[RAY_OFFSET, LIGHT, MAP_COMPARE, MAP_PIXELS],
     source: include_str!("lookup.wgsl"),
 };
 
@@ -64,65 +63,25 @@ pub struct GpuLispsm {
     scene: Option<MapScene>,
 }
 
-impl GpuLispsm {
-    /// The CPU's fallback for spot and point lights on the GPU: `gpu:sm`'s map, or
-    /// `gpu:pcf`'s with the kernel.
-    fn fallback(&self, frame: &Frame) -> Result<Shadows> {
-        let mut sm = fallback_map(
-            self.cpu.kernel,
-            self.cpu.resolution,
-            self.cpu.bias,
-            self.cpu.slope_bias,
-        )?;
-        let mut s = sm.render(frame)?;
-        s.stats.count("single_map_fallback", 1.0);
-        Ok(s)
-    }
-}
-
-/// `gpu:sm` (kernel 0) or `gpu:pcf` with these parameters: the single map the CPU's
-/// warped and split maps fall back to under spot and point lights.
-pub(crate) fn fallback_map(
-    kernel: u32,
-    resolution: u32,
-    bias: f32,
-    slope_bias: f32,
-) -> Result<GpuShadowMap> {
-    let mut sm = if kernel > 0 {
-        GpuShadowMap::pcf()
-    } else {
-        GpuShadowMap::standard()
-    };
-    sm.set_param("resolution", &resolution.to_string())?;
-    sm.set_param("bias", &bias.to_string())?;
-    sm.set_param("slope-bias", &slope_bias.to_string())?;
-    if kernel > 0 {
-        sm.set_param("kernel", &kernel.to_string())?;
-    }
-    Ok(sm)
-}
-
 impl ShadowTechnique for GpuLispsm {
     fn name(&self) -> &'static str {
         NAME
     }
 
-    fn params(&self) -> BTreeMap<String, serde_json::Value> {
-        self.cpu.params()
-    }
-
-    fn param_specs(&self) -> Vec<ParamSpec> {
-        self.cpu.param_specs()
-    }
-
-    fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
-        crate::twin::set_twin_param(NAME, &mut self.cpu, key, value)
-    }
+    crate::twin::twin_params!(cpu);
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
         let res = check_resolution(NAME, self.cpu.resolution)?;
         let Light::Directional { to_light } = *frame.light else {
-            return self.fallback(frame);
+            let c = &self.cpu;
+            return GpuShadowMap::fallback(
+                frame,
+                c.kernel,
+                c.resolution,
+                c.bias,
+                c.slope_bias,
+                "single_map_fallback",
+            );
         };
         check_light_map_size(NAME, 1, res)?;
         let mut stats = Stats::default();
@@ -142,11 +101,7 @@ impl ShadowTechnique for GpuLispsm {
         let (count, row, _) = maps::lookup_grid(&gpu, frame);
         let d = (warp.y.1 - warp.y.0).max(1e-12);
         let k = 2.0 * (warp.n + d) / d;
-        let slope = if cpu.kernel > 0 {
-            cpu.slope_bias * (cpu.kernel / 2 + 1) as f32
-        } else {
-            cpu.slope_bias
-        };
+        let slope = pcf_slope_bias(cpu.slope_bias, cpu.kernel);
         let params = Params {
             clip_from_world: view.clip_from_world.to_cols_array(),
             light_from_world: basis.to_cols_array(),

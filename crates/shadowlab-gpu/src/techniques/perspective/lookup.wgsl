@@ -5,7 +5,7 @@
 // after the paper's offset in shadow map space: `texel′ · (bias + slope_bias · tan θ′)`,
 // texel′ the post-space texel at the receiver and θ′ the post-space angle between its
 // plane and the light. The library's `psm` look-up, line for line. Composed after
-// shaders/common/{ray_offset, light, map_compare}.wgsl.
+// shaders/common/{ray_offset, light, map_compare, map_pixels}.wgsl.
 
 struct MapU {
     // World to the map's clip space times w_p.
@@ -58,9 +58,6 @@ struct Params {
 @group(0) @binding(3) var<storage, read> view: array<f32>;
 @group(0) @binding(4) var<storage, read_write> out: array<f32>;
 
-const VIEW_STRIDE: u32 = 10u;
-const NO_TRIANGLE: u32 = 0xffffffffu;
-
 fn face_map(f: u32) -> u32 {
     if f < 4u {
         return params.faces_a[f];
@@ -107,27 +104,4 @@ fn shadow_term(p: vec3<f32>, nw: vec3<f32>) -> f32 {
         r = 1.0 + (-depth - offset) / m.span;
     }
     return map_nearest(map, i, params.res, u, v, r);
-}
-
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.y * params.row + gid.x;
-    if k >= params.count {
-        return;
-    }
-    let b = k * VIEW_STRIDE;
-    let tri = bitcast<u32>(view[b + 9u]);
-    var s = 1.0;
-    if tri != NO_TRIANGLE {
-        let p = vec3<f32>(view[b], view[b + 1u], view[b + 2u]);
-        let n = vec3<f32>(view[b + 6u], view[b + 7u], view[b + 8u]);
-        if illuminates(params.light, p, n) {
-            s = shadow_term(p, n);
-        } else {
-            s = 0.0;
-        }
-    }
-    out[k * 3u] = s;
-    out[k * 3u + 1u] = s;
-    out[k * 3u + 2u] = s;
 }

@@ -30,15 +30,14 @@
 use super::maps::{self, MapScene};
 use super::shadow_map::GpuShadowMap;
 use crate::compute::render_pipeline;
-use crate::shader::{Stage, ALPHA_MASK, LIGHT, MAP_COMPARE, RAY_OFFSET, TRIANGLES};
+use crate::shader::{Stage, ALPHA_MASK, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET, TRIANGLES};
 use crate::transfer::{storage, uniform, Timer};
 use crate::upload::LightU;
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::Result;
 use shadowlab::techniques::perspective::{Perspective, Plan, PostLight, Setup};
 use shadowlab::techniques::shadow_map::check_light_map_size;
-use shadowlab::techniques::{Frame, ParamSpec, ShadowTechnique, Shadows, Stats};
-use std::collections::BTreeMap;
+use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Stats};
 
 /// `gpu:psm`'s name.
 pub const NAME: &str = "gpu:psm";
@@ -51,7 +50,7 @@ const POST_MAP: Stage = Stage {
 
 const LOOKUP: Stage = Stage {
     name: "perspective/lookup.wgsl",
-    common: &[RAY_OFFSET, LIGHT, MAP_COMPARE],
+    common: &[RAY_OFFSET, LIGHT, MAP_COMPARE, MAP_PIXELS],
     source: include_str!("lookup.wgsl"),
 };
 
@@ -111,11 +110,6 @@ pub struct GpuPsm {
     scene: Option<MapScene>,
 }
 
-/// `post_map.wgsl`'s render pipeline: `gpu:sm`'s depth pipeline over the post-space stage.
-fn post_map_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
-    POST_MAP.depth_tested_pipeline(device, &[])
-}
-
 /// The stage's code for the post-space light's kind.
 fn kind_code(kind: PostLight) -> u32 {
     match kind {
@@ -158,9 +152,7 @@ impl GpuPsm {
                 uniform(&gpu, "post-perspective map", &face)
             })
             .collect();
-        let pipeline = gpu.stage(NAME, "pipeline", || {
-            render_pipeline(&gpu, "post_map", post_map_pipeline)
-        })?;
+        let pipeline = gpu.stage(NAME, "pipeline", || render_pipeline(&gpu, &POST_MAP, &[]))?;
         stats.stage("shadow_map", || {
             gpu.stage(NAME, "shadow_map", || {
                 maps::draw_layers(ms, &pipeline, &texture, &faces, frame, &mut timer)
@@ -243,17 +235,7 @@ impl ShadowTechnique for GpuPsm {
         NAME
     }
 
-    fn params(&self) -> BTreeMap<String, serde_json::Value> {
-        self.cpu.params()
-    }
-
-    fn param_specs(&self) -> Vec<ParamSpec> {
-        self.cpu.param_specs()
-    }
-
-    fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
-        crate::twin::set_twin_param(NAME, &mut self.cpu, key, value)
-    }
+    crate::twin::twin_params!(cpu);
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
         let mut stats = Stats::default();
@@ -264,13 +246,15 @@ impl ShadowTechnique for GpuPsm {
                 Ok(Shadows::of_frame(frame, maps::unreached(frame), stats))
             }
             Plan::Uniform => {
-                let mut sm = GpuShadowMap::standard();
-                sm.set_param("resolution", &self.cpu.resolution.to_string())?;
-                sm.set_param("bias", &self.cpu.bias.to_string())?;
-                sm.set_param("slope-bias", &self.cpu.slope_bias.to_string())?;
-                let mut out = sm.render(frame)?;
-                out.stats.count("uniform_fallback", 1.0);
-                Ok(out)
+                let c = &self.cpu;
+                GpuShadowMap::fallback(
+                    frame,
+                    0,
+                    c.resolution,
+                    c.bias,
+                    c.slope_bias,
+                    "uniform_fallback",
+                )
             }
             Plan::Maps(setup) => self.draw(frame, &setup, stats),
         }

@@ -33,8 +33,7 @@ use shadowlab::error::{Error, Result};
 use shadowlab::math::{gamma, Vec2};
 use shadowlab::sampling::{pattern, PatternKind};
 use shadowlab::techniques::raytrace::RayTrace;
-use shadowlab::techniques::{Frame, ParamSpec, ShadowTechnique, Shadows, Stats};
-use std::collections::BTreeMap;
+use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Stats};
 use std::sync::Arc;
 
 /// The technique's name.
@@ -115,17 +114,7 @@ impl ShadowTechnique for GpuRayTrace {
         NAME
     }
 
-    fn params(&self) -> BTreeMap<String, serde_json::Value> {
-        self.cpu.params()
-    }
-
-    fn param_specs(&self) -> Vec<ParamSpec> {
-        self.cpu.param_specs()
-    }
-
-    fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
-        crate::twin::set_twin_param(NAME, &mut self.cpu, key, value)
-    }
+    crate::twin::twin_params!(cpu);
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
         if frame.area.is_some() {

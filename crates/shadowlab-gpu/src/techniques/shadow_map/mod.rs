@@ -20,37 +20,35 @@
 //! the verdict tests bound. The map is drawn by the hardware rasterizer on every adapter
 //! (`counters.hardware_raster = 1`); a compute rasterizer is not offered yet.
 
-use crate::compute::{bind_entries, pipeline, render_pipeline, to_rgb};
-use crate::device::{shared, Gpu};
-use crate::shader::{Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, TRIANGLES};
-use crate::transfer::{grid, output, read_back, storage, uniform, Timer};
-use crate::upload::{view_buffer, LightU, SceneBuffers, SceneKey};
+use super::maps::{self, MapScene};
+use crate::shader::{Stage, ALPHA_MASK, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET, TRIANGLES};
+use crate::transfer::{storage, uniform, Timer};
+use crate::upload::LightU;
 use bytemuck::{Pod, Zeroable};
-use shadowlab::error::{Error, Result};
+use shadowlab::error::Result;
 use shadowlab::light::{light_views, LightView};
-use shadowlab::techniques::shadow_map::{check_resolution, ShadowMap, DIRECTIONAL_PAD};
-use shadowlab::techniques::{Frame, ParamSpec, ShadowTechnique, Shadows, Stats};
-use std::collections::BTreeMap;
-use std::sync::Arc;
+use shadowlab::techniques::shadow_map::{
+    check_resolution, pcf_slope_bias, ShadowMap, DIRECTIONAL_PAD,
+};
+use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Stats};
 
 /// `gpu:sm`'s name.
 pub const SM: &str = "gpu:sm";
 /// `gpu:pcf`'s name.
 pub const PCF: &str = "gpu:pcf";
 
-const DEPTH: Stage = Stage {
-    name: "depth.wgsl",
+/// The light views' depth stage, which the warped and split maps draw through too.
+pub(crate) const DEPTH: Stage = Stage {
+    name: "shadow_map/depth.wgsl",
     common: &[ALPHA_MASK, TRIANGLES],
     source: include_str!("depth.wgsl"),
 };
 
 const LOOKUP: Stage = Stage {
-    name: "lookup.wgsl",
-    common: &[RAY_OFFSET, LIGHT],
+    name: "shadow_map/lookup.wgsl",
+    common: &[RAY_OFFSET, LIGHT, MAP_COMPARE, MAP_PIXELS],
     source: include_str!("lookup.wgsl"),
 };
-
-const WORKGROUP: u32 = 64;
 
 /// `FaceU` of `depth.wgsl`.
 #[repr(C)]
@@ -98,21 +96,11 @@ pub(crate) fn depth_scale(v: &LightView) -> f32 {
     }
 }
 
-/// The scene on one device, with the pipelines.
-struct Resident {
-    key: SceneKey,
-    gpu: Arc<Gpu>,
-    scene: SceneBuffers,
-    depth: wgpu::RenderPipeline,
-    lookup: wgpu::ComputePipeline,
-    sampler: wgpu::Sampler,
-}
-
 /// A shadow map drawn by the hardware rasterizer; the CPU `sm`'s or `pcf`'s parameters.
 pub struct GpuShadowMap {
     name: &'static str,
     cpu: ShadowMap,
-    resident: Option<Resident>,
+    scene: Option<MapScene>,
 }
 
 impl GpuShadowMap {
@@ -121,7 +109,7 @@ impl GpuShadowMap {
         GpuShadowMap {
             name: SM,
             cpu: ShadowMap::standard(),
-            resident: None,
+            scene: None,
         }
     }
 
@@ -130,53 +118,36 @@ impl GpuShadowMap {
         GpuShadowMap {
             name: PCF,
             cpu: ShadowMap::pcf(),
-            resident: None,
+            scene: None,
         }
     }
 
-    fn resident(&mut self, frame: &Frame, stats: &mut Stats) -> Result<&mut Resident> {
-        let key = SceneKey::of(frame.scene);
-        if self.resident.as_ref().is_none_or(|r| r.key != key) {
-            self.resident = None;
-            let gpu = shared()?;
-            let name = self.name;
-            let scene = stats.stage("upload_scene", || {
-                gpu.stage(name, "upload_scene", || {
-                    SceneBuffers::new(&gpu, frame.scene)
-                })
-            })??;
-            let (depth, lookup, sampler) = gpu.stage(name, "pipeline", || {
-                (
-                    render_pipeline(&gpu, "depth", depth_pipeline),
-                    pipeline(&gpu, &LOOKUP, "main"),
-                    gpu.device.create_sampler(&wgpu::SamplerDescriptor {
-                        label: Some("shadow comparison"),
-                        mag_filter: wgpu::FilterMode::Linear,
-                        min_filter: wgpu::FilterMode::Linear,
-                        compare: Some(wgpu::CompareFunction::LessEqual),
-                        ..Default::default()
-                    }),
-                )
-            })?;
-            self.resident = Some(Resident {
-                key,
-                gpu,
-                scene,
-                depth,
-                lookup,
-                sampler,
-            });
+    /// The single map a warped or split map falls back to where its CPU twin does: `gpu:sm`
+    /// (kernel 0) or `gpu:pcf` with these parameters, rendering `frame` and counting
+    /// `counter`.
+    pub(crate) fn fallback(
+        frame: &Frame,
+        kernel: u32,
+        resolution: u32,
+        bias: f32,
+        slope_bias: f32,
+        counter: &str,
+    ) -> Result<Shadows> {
+        let mut sm = if kernel > 0 {
+            GpuShadowMap::pcf()
+        } else {
+            GpuShadowMap::standard()
+        };
+        sm.set_param("resolution", &resolution.to_string())?;
+        sm.set_param("bias", &bias.to_string())?;
+        sm.set_param("slope-bias", &slope_bias.to_string())?;
+        if kernel > 0 {
+            sm.set_param("kernel", &kernel.to_string())?;
         }
-        self.resident
-            .as_mut()
-            .ok_or_else(|| Error::Internal(format!("{}: the scene was not uploaded", self.name)))
+        let mut s = sm.render(frame)?;
+        s.stats.count(counter, 1.0);
+        Ok(s)
     }
-}
-
-/// The depth stage's render pipeline: no colour target, a 32-bit float depth written by
-/// the fragment, the nearest kept (`Less`), both faces drawn.
-pub(crate) fn depth_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
-    DEPTH.depth_tested_pipeline(device, &[])
 }
 
 impl ShadowTechnique for GpuShadowMap {
@@ -184,26 +155,15 @@ impl ShadowTechnique for GpuShadowMap {
         self.name
     }
 
-    fn params(&self) -> BTreeMap<String, serde_json::Value> {
-        self.cpu.params()
-    }
-
-    fn param_specs(&self) -> Vec<ParamSpec> {
-        self.cpu.param_specs()
-    }
-
-    fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
-        crate::twin::set_twin_param(self.name, &mut self.cpu, key, value)
-    }
+    crate::twin::twin_params!(cpu);
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
         let name = self.name;
-        let res_side = check_resolution(name, self.cpu.resolution)?;
+        let res = check_resolution(name, self.cpu.resolution)?;
         let mut stats = Stats::default();
         let cpu = self.cpu.clone();
-        let res = self.resident(frame, &mut stats)?;
-        let gpu = res.gpu.clone();
-        gpu.check_texture_side(&format!("{name}.resolution"), res_side)?;
+        let ms = MapScene::keep(&mut self.scene, name, frame, &mut stats)?;
+        let gpu = ms.gpu.clone();
         let views = light_views(
             frame.light,
             &frame.view.receiver_bounds(),
@@ -211,212 +171,57 @@ impl ShadowTechnique for GpuShadowMap {
             DIRECTIONAL_PAD,
         );
         let layers = views.len() as u32;
-        if layers > gpu.limits.max_texture_array_layers {
-            return Err(Error::Limit(format!(
-                "{name}: {layers} light views need more array layers than the adapter's {}",
-                gpu.limits.max_texture_array_layers
-            )));
-        }
-        let n = frame.view.triangle.len() as u32;
-        let view = stats.stage("upload_view", || view_buffer(&gpu, frame.view))?;
-        let out = output(&gpu, "the shadow terms", u64::from(n) * 12)?;
-        let mut timer = Timer::new(&gpu, 8);
-        let map = stats.stage("shadow_map", || {
+        let texture = maps::depth_array(&gpu, name, &format!("{name}.resolution"), res, layers)?;
+        let mut timer = Timer::new(&gpu, layers + 1);
+        stats.stage("shadow_map", || {
             gpu.stage(name, "shadow_map", || {
-                draw_maps(res, frame, &views, res_side, &mut timer)
+                maps::draw_views(ms, &texture, &views, frame, &mut timer)
             })
-        })??;
-        stats.stage("lookup", || {
-            gpu.stage(name, "lookup", || {
-                lookup(res, frame, &cpu, &views, &map, &view, &out, &mut timer)
-            })
-        })??;
-        let raw = stats.stage("readback", || {
-            gpu.stage(name, "readback", || {
-                read_back(&gpu, &out, u64::from(n) * 12)
-            })
-        })??;
-        for (stage, ms) in timer.read(&gpu)? {
-            stats.count(&format!("gpu_{stage}_ms"), ms);
-        }
-        stats.memory_bytes = u64::from(res_side).pow(2) * u64::from(layers) * 4;
-        stats.count(
-            "map_texels",
-            f64::from(res_side).powi(2) * f64::from(layers),
-        );
-        stats.count("hardware_raster", 1.0);
-        stats.device = Some(gpu.adapter.label());
-        Ok(Shadows::of_frame(frame, to_rgb(&raw), stats))
-    }
-}
-
-/// Draws every light view's depth map into one layer of a new array texture.
-fn draw_maps(
-    res: &Resident,
-    frame: &Frame,
-    views: &[LightView],
-    side: u32,
-    timer: &mut Timer,
-) -> Result<wgpu::Texture> {
-    let gpu = &res.gpu;
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("shadow map"),
-        size: wgpu::Extent3d {
-            width: side,
-            height: side,
-            depth_or_array_layers: views.len() as u32,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Depth32Float,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
-    let s = &res.scene;
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    for (i, v) in views.iter().enumerate() {
-        let face = FaceU {
-            clip_from_world: v.clip_from_world.to_cols_array(),
-            light_from_world: v.light_from_world.to_cols_array(),
-            depth_scale: depth_scale(v),
-            masks: u32::from(s.masks),
+        })?;
+        let (count, row, _) = maps::lookup_grid(&gpu, frame);
+        let params = LookupParams {
+            light: LightU::of(frame.light),
+            count,
+            row,
+            res: cpu.resolution,
+            kernel: cpu.kernel,
+            bias: cpu.bias,
+            slope_bias: pcf_slope_bias(cpu.slope_bias, cpu.kernel),
             pad: [0; 2],
         };
-        let face = uniform(gpu, "light view", &face);
-        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: None,
-            layout: &res.depth.get_bind_group_layout(0),
-            entries: &bind_entries(&[
-                &face,
-                &s.triangles,
-                &s.material_of,
-                &s.materials,
-                &s.uvs,
-                &s.texels,
-            ]),
-        });
-        let layer = texture.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2),
-            base_array_layer: i as u32,
-            array_layer_count: Some(1),
-            ..Default::default()
-        });
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("depth"),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &layer,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: timer.render_pass("shadow_map"),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&res.depth);
-            pass.set_bind_group(0, &group, &[]);
-            pass.draw(0..frame.scene.len() as u32 * 3, 0..1);
-        }
+        let params = uniform(&gpu, "look-up parameters", &params);
+        let table: Vec<ViewU> = views
+            .iter()
+            .map(|v| ViewU {
+                clip_from_world: v.clip_from_world.to_cols_array(),
+                light_from_world: v.light_from_world.to_cols_array(),
+                ortho: u32::from(v.orthographic),
+                near: v.near,
+                extent: v.extent,
+                depth_scale: depth_scale(v),
+            })
+            .collect();
+        let table = storage(&gpu, "the light views", bytemuck::cast_slice(&table))?;
+        let sampler = maps::comparison_sampler(&gpu);
+        let array = maps::array_view(&texture);
+        let value = maps::look_up(
+            ms,
+            name,
+            &LOOKUP,
+            &[
+                params.as_entire_binding(),
+                table.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&array),
+                wgpu::BindingResource::Sampler(&sampler),
+            ],
+            frame,
+            &mut timer,
+            &mut stats,
+        )?;
+        stats.memory_bytes = u64::from(res).pow(2) * u64::from(layers) * 4;
+        stats.count("map_texels", f64::from(res).powi(2) * f64::from(layers));
+        Ok(Shadows::of_frame(frame, value, stats))
     }
-    gpu.queue.submit([encoder.finish()]);
-    Ok(texture)
-}
-
-/// Records and submits the look-up over every pixel.
-#[allow(clippy::too_many_arguments)]
-fn lookup(
-    res: &Resident,
-    frame: &Frame,
-    cpu: &ShadowMap,
-    views: &[LightView],
-    map: &wgpu::Texture,
-    view: &wgpu::Buffer,
-    out: &wgpu::Buffer,
-    timer: &mut Timer,
-) -> Result<()> {
-    let gpu = &res.gpu;
-    let n = frame.view.triangle.len() as u32;
-    let (gx, gy, row) = grid(gpu, n, WORKGROUP);
-    // PCF compares at texels up to kernel/2 + 1 away: the CPU scales its slope term so.
-    let slope = if cpu.kernel > 0 {
-        cpu.slope_bias * (cpu.kernel / 2 + 1) as f32
-    } else {
-        cpu.slope_bias
-    };
-    let params = LookupParams {
-        light: LightU::of(frame.light),
-        count: n,
-        row,
-        res: cpu.resolution,
-        kernel: cpu.kernel,
-        bias: cpu.bias,
-        slope_bias: slope,
-        pad: [0; 2],
-    };
-    let params = uniform(gpu, "look-up parameters", &params);
-    let table: Vec<ViewU> = views
-        .iter()
-        .map(|v| ViewU {
-            clip_from_world: v.clip_from_world.to_cols_array(),
-            light_from_world: v.light_from_world.to_cols_array(),
-            ortho: u32::from(v.orthographic),
-            near: v.near,
-            extent: v.extent,
-            depth_scale: depth_scale(v),
-        })
-        .collect();
-    let table = storage(gpu, "the light views", bytemuck::cast_slice(&table))?;
-    let map_view = map.create_view(&wgpu::TextureViewDescriptor {
-        dimension: Some(wgpu::TextureViewDimension::D2Array),
-        ..Default::default()
-    });
-    let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &res.lookup.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: params.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: table.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: view.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: wgpu::BindingResource::TextureView(&map_view),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: wgpu::BindingResource::Sampler(&res.sampler),
-            },
-            wgpu::BindGroupEntry {
-                binding: 5,
-                resource: out.as_entire_binding(),
-            },
-        ],
-    });
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("lookup"),
-            timestamp_writes: timer.pass("lookup"),
-        });
-        pass.set_pipeline(&res.lookup);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(gx, gy, 1);
-    }
-    gpu.queue.submit([encoder.finish()]);
-    Ok(())
 }
 
 #[cfg(test)]
