@@ -2,38 +2,8 @@
 //! bind groups of buffers by binding number, and shadow terms read back as RGB.
 
 use crate::device::Gpu;
-use crate::shader::{Common, Stage};
+use crate::shader::{PipelineKey, Stage};
 use shadowlab::math::Vec3;
-
-/// What the pipeline caches find a pipeline by: its stage's text (its own file and its
-/// common files, compared by content, so two stages may share a file name) and its entry
-/// point (`""` for a render pipeline's `vs` and `fs`).
-pub(crate) struct PipelineKey {
-    source: &'static str,
-    common: &'static [Common],
-    entry: String,
-}
-
-impl PipelineKey {
-    fn new(stage: &Stage, entry: &str) -> Self {
-        PipelineKey {
-            source: stage.source,
-            common: stage.common,
-            entry: entry.to_string(),
-        }
-    }
-
-    fn is(&self, stage: &Stage, entry: &str) -> bool {
-        self.entry == entry
-            && self.source == stage.source
-            && self.common.len() == stage.common.len()
-            && self
-                .common
-                .iter()
-                .zip(stage.common)
-                .all(|(a, b)| a.source == b.source)
-    }
-}
 
 /// The compute pipeline of `stage`'s entry point `entry`, with the layout its bindings
 /// imply: made once per device and kept.

@@ -15,7 +15,7 @@
 //! the same way. wgpu's default handler for errors outside a scope panics: it is replaced by
 //! one that records the message.
 
-use crate::compute::PipelineKey;
+use crate::shader::PipelineKey;
 use shadowlab::error::{Error, Result};
 use std::sync::{Arc, Mutex, OnceLock};
 

@@ -135,3 +135,33 @@ impl Stage {
         })
     }
 }
+
+/// What the pipeline caches find a pipeline by: its stage's text (its own file and its
+/// common files, compared by content, so two stages may share a file name) and its entry
+/// point (`""` for a render pipeline's `vs` and `fs`).
+pub(crate) struct PipelineKey {
+    source: &'static str,
+    common: &'static [Common],
+    entry: String,
+}
+
+impl PipelineKey {
+    pub(crate) fn new(stage: &Stage, entry: &str) -> Self {
+        PipelineKey {
+            source: stage.source,
+            common: stage.common,
+            entry: entry.to_string(),
+        }
+    }
+
+    pub(crate) fn is(&self, stage: &Stage, entry: &str) -> bool {
+        self.entry == entry
+            && self.source == stage.source
+            && self.common.len() == stage.common.len()
+            && self
+                .common
+                .iter()
+                .zip(stage.common)
+                .all(|(a, b)| a.source == b.source)
+    }
+}

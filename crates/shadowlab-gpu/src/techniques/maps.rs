@@ -6,15 +6,43 @@
 
 use crate::compute::{pipeline, render_pipeline, to_rgb};
 use crate::device::{shared, Gpu};
-use crate::shader::Stage;
-use crate::techniques::shadow_map::{depth_scale, FaceU, DEPTH};
+use crate::shader::{Stage, ALPHA_MASK, TRIANGLES};
 use crate::transfer::{grid, output, read_back, uniform, Timer};
 use crate::upload::{view_buffer, SceneBuffers, SceneKey};
+use bytemuck::{Pod, Zeroable};
 use shadowlab::error::{Error, Result};
 use shadowlab::light::LightView;
 use shadowlab::math::Vec3;
 use shadowlab::techniques::{Frame, Stats};
 use std::sync::Arc;
+
+/// `gpu:sm`'s depth stage (`shadow_map/depth.wgsl`), which the warped and split maps draw
+/// their light views through too.
+pub(crate) const DEPTH: Stage = Stage {
+    name: "shadow_map/depth.wgsl",
+    common: &[ALPHA_MASK, TRIANGLES],
+    source: include_str!("shadow_map/depth.wgsl"),
+};
+
+/// `FaceU` of `shadow_map/depth.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct FaceU {
+    pub(crate) clip_from_world: [f32; 16],
+    pub(crate) light_from_world: [f32; 16],
+    pub(crate) depth_scale: f32,
+    pub(crate) masks: u32,
+    pub(crate) pad: [u32; 2],
+}
+
+/// The depth a view's linear depths are divided by before they are stored: its far plane.
+pub(crate) fn depth_scale(v: &LightView) -> f32 {
+    if v.far.is_finite() && v.far > 0.0 {
+        v.far
+    } else {
+        1.0
+    }
+}
 
 /// Threads per workgroup of the look-ups.
 pub(crate) const WORKGROUP: u32 = 64;

@@ -23,8 +23,8 @@
 //! Spot and point lights take the CPU's fallback, one map (`gpu:sm`'s, or `gpu:pcf`'s with
 //! a kernel), counted as `single_map_fallback`.
 
-use super::maps::{self, MapScene};
-use super::shadow_map::{depth_scale, GpuShadowMap};
+use super::maps::{self, depth_scale, MapScene};
+use super::shadow_map::GpuShadowMap;
 use crate::compute::{bind, pipeline};
 use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
 use crate::transfer::{read_back, storage, uniform, Timer};

@@ -15,8 +15,8 @@
 //! stored over the far plane, the adapter's bilinear weight precision under PCF), and the
 //! texel size at the receiver evaluated in f32 where the CPU uses f64.
 
-use super::maps::{self, MapScene};
-use super::shadow_map::{depth_scale, GpuShadowMap};
+use super::maps::{self, depth_scale, MapScene};
+use super::shadow_map::GpuShadowMap;
 use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
 use crate::transfer::{uniform, Timer};
 use crate::upload::LightU;

@@ -20,13 +20,13 @@
 //! the verdict tests bound. The map is drawn by the hardware rasterizer on every adapter
 //! (`counters.hardware_raster = 1`); a compute rasterizer is not offered yet.
 
-use super::maps::{self, MapScene};
-use crate::shader::{Stage, ALPHA_MASK, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET, TRIANGLES};
+use super::maps::{self, depth_scale, MapScene};
+use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
 use crate::transfer::{storage, uniform, Timer};
 use crate::upload::LightU;
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::Result;
-use shadowlab::light::{light_views, LightView};
+use shadowlab::light::light_views;
 use shadowlab::techniques::shadow_map::{
     check_resolution, pcf_slope_bias, ShadowMap, DIRECTIONAL_PAD,
 };
@@ -37,29 +37,11 @@ pub const SM: &str = "gpu:sm";
 /// `gpu:pcf`'s name.
 pub const PCF: &str = "gpu:pcf";
 
-/// The light views' depth stage, which the warped and split maps draw through too.
-pub(crate) const DEPTH: Stage = Stage {
-    name: "shadow_map/depth.wgsl",
-    common: &[ALPHA_MASK, TRIANGLES],
-    source: include_str!("depth.wgsl"),
-};
-
 const LOOKUP: Stage = Stage {
     name: "shadow_map/lookup.wgsl",
     common: &[RAY_OFFSET, LIGHT, MAP_COMPARE, MAP_PIXELS],
     source: include_str!("lookup.wgsl"),
 };
-
-/// `FaceU` of `depth.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub(crate) struct FaceU {
-    pub(crate) clip_from_world: [f32; 16],
-    pub(crate) light_from_world: [f32; 16],
-    pub(crate) depth_scale: f32,
-    pub(crate) masks: u32,
-    pub(crate) pad: [u32; 2],
-}
 
 /// `ViewU` of `lookup.wgsl`.
 #[repr(C)]
@@ -85,15 +67,6 @@ struct LookupParams {
     bias: f32,
     slope_bias: f32,
     pad: [u32; 2],
-}
-
-/// The depth a view's linear depths are divided by before they are stored: its far plane.
-pub(crate) fn depth_scale(v: &LightView) -> f32 {
-    if v.far.is_finite() && v.far > 0.0 {
-        v.far
-    } else {
-        1.0
-    }
 }
 
 /// A shadow map drawn by the hardware rasterizer; the CPU `sm`'s or `pcf`'s parameters.
@@ -230,7 +203,7 @@ mod tests {
 
     #[test]
     fn mirrored_structs_have_the_wgsl_sizes() {
-        assert_eq!(std::mem::size_of::<FaceU>(), 144);
+        assert_eq!(std::mem::size_of::<maps::FaceU>(), 144);
         assert_eq!(std::mem::size_of::<ViewU>(), 144);
         assert_eq!(std::mem::size_of::<LookupParams>(), 80);
     }
