@@ -67,3 +67,53 @@ fn gpu_soft_variants_match_their_twins_under_an_area_light() {
         eprintln!("penumbra: {gpu} {eg:.5}, {cpu} {ec:.5}");
     }
 }
+
+/// The parameters beyond the defaults reach the GPU: the blur's compute passes, tri-linear
+/// and bilinear look-ups, half-float and 32-bit moments, 32-bit basis images, a map side
+/// that is not a power of two (box-filtered mip levels), each judged as the defaults are.
+#[test]
+fn gpu_filtered_maps_follow_their_parameters() {
+    if !have_gpu("gpu filtered parameters") {
+        return;
+    }
+    let (scene, set) = ("chessboard", support::builtin("chessboard", 128, 96, None));
+    let runs: [(&str, &[&str]); 5] = [
+        ("vsm", &[RESOLUTION, "blur=5", "filter=trilinear"]),
+        ("evsm", &["resolution=300", "bits=16", "moments=2"]),
+        ("msm", &[RESOLUTION, "bits=32", "filter=bilinear"]),
+        ("csm", &[RESOLUTION, "precision=f32", "m=4", "blur=3"]),
+        ("csm", &["resolution=300", "max-aniso=4"]),
+    ];
+    for (t, params) in runs {
+        let gpu = format!("gpu:{t}");
+        let v = verdict(scene, &set, &gpu, t, params, SPP);
+        eprintln!(
+            "{scene} {params:?}: {gpu} {:.5}, {t} {:.5}",
+            v.errors.0, v.errors.1
+        );
+    }
+    // The blur changes the image: it is not skipped.
+    let plain = verdict(scene, &set, "gpu:vsm", "vsm", &[RESOLUTION], SPP);
+    let blurred = verdict(scene, &set, "gpu:vsm", "vsm", &[RESOLUTION, "blur=7"], SPP);
+    assert!(
+        plain.gpu != blurred.gpu,
+        "blur=7 left gpu:vsm's image unchanged"
+    );
+}
+
+/// Bad parameters are refused in one sentence naming the GPU technique.
+#[test]
+fn bad_parameters_name_the_gpu_technique() {
+    shadowlab_gpu::register();
+    let mut t = shadowlab::techniques::create("gpu:csm-soft").unwrap();
+    for (k, v) in [
+        ("m", "0"),
+        ("blur", "4"),
+        ("filter", "cubic"),
+        ("resolution", "0"),
+    ] {
+        let e = t.set_param(k, v).unwrap_err().to_string();
+        assert!(e.contains("gpu:csm-soft"), "{k}={v}: {e}");
+    }
+    assert_eq!(t.params()["soft"], serde_json::Value::from(true));
+}

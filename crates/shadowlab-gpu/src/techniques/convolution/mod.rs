@@ -4,8 +4,8 @@
 //!
 //! Encoder (`basis.wgsl`): the Fourier basis images `sin(c_k z)`, `cos(c_k z)`, two terms
 //! to a layer of `Rgba8Unorm` texels (the paper's 8-bit storage) or 32-bit floats, with a
-//! real mip chain that the hardware samples tri-linearly and anisotropically as the paper
-//! did. Test (`reconstruction.wgsl`): Eq. 13 over every layer, offset and scaled about the
+//! real mip chain read by the hardware's tri-linear filtering, anisotropic look-ups as
+//! probes along the footprint (see [`super::filtering`]). Test (`reconstruction.wgsl`): Eq. 13 over every layer, offset and scaled about the
 //! pivot as the library's `csm` does. Departures: the basis is evaluated directly per term
 //! (the library rotates the angle term by term, and rounds large 8-bit maps' depths to 2¹⁶
 //! levels first), so a code may differ by one.

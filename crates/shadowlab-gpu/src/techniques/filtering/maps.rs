@@ -172,7 +172,8 @@ pub(super) fn padded_row(width: u32, bytes: u32) -> u32 {
         * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
 }
 
-/// The maps drawn by [`draw`], read back as the library's depth buffers.
+/// The maps drawn by [`draw`], read back as the library's depth buffers (one view at a
+/// time, so a cube's six faces never need one buffer).
 pub(super) fn read_depth(
     gpu: &Gpu,
     texels: &wgpu::Texture,
@@ -180,65 +181,66 @@ pub(super) fn read_depth(
     side: u32,
 ) -> Result<Vec<DepthBuffer>> {
     let row = padded_row(side, TEXEL_BYTES);
-    let layer_bytes = u64::from(row) * u64::from(side);
-    let total = layer_bytes * views as u64;
-    gpu.check_binding("the filtered maps read back", total)?;
+    let bytes = u64::from(row) * u64::from(side);
+    if bytes > gpu.limits.max_buffer_size {
+        return Err(Error::Limit(format!(
+            "a filtered map of {side}² texels needs {bytes} bytes read back, over the adapter's largest buffer of {} bytes ({})",
+            gpu.limits.max_buffer_size, gpu.adapter.name
+        )));
+    }
     let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("filtered maps"),
-        size: total.max(4),
+        label: Some("filtered map"),
+        size: bytes.max(4),
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    for i in 0..views {
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture: texels,
-                mip_level: 0,
-                origin: wgpu::Origin3d {
-                    x: 0,
-                    y: 0,
-                    z: i as u32,
-                },
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: layer_bytes * i as u64,
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(side),
-                },
-            },
-            wgpu::Extent3d {
-                width: side,
-                height: side,
-                depth_or_array_layers: 1,
-            },
-        );
-    }
-    gpu.queue.submit([encoder.finish()]);
-    let raw = read_back(gpu, &buffer, total)?;
     let word = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-    Ok((0..views)
+    (0..views)
         .map(|i| {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            encoder.copy_texture_to_buffer(
+                wgpu::TexelCopyTextureInfo {
+                    texture: texels,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d {
+                        x: 0,
+                        y: 0,
+                        z: i as u32,
+                    },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(row),
+                        rows_per_image: Some(side),
+                    },
+                },
+                wgpu::Extent3d {
+                    width: side,
+                    height: side,
+                    depth_or_array_layers: 1,
+                },
+            );
+            gpu.queue.submit([encoder.finish()]);
+            let raw = read_back(gpu, &buffer, bytes)?;
             let n = (side * side) as usize;
             let (mut depth, mut id) = (Vec::with_capacity(n), Vec::with_capacity(n));
-            for y in 0..side as u64 {
-                let start = (layer_bytes * i as u64 + y * u64::from(row)) as usize;
-                for t in raw[start..start + (side * TEXEL_BYTES) as usize].chunks_exact(8) {
+            for r in raw.chunks_exact(row as usize) {
+                for t in r[..(side * TEXEL_BYTES) as usize].chunks_exact(8) {
                     depth.push(f32::from_bits(word(&t[..4])));
                     id.push(word(&t[4..]));
                 }
             }
-            DepthBuffer {
+            Ok(DepthBuffer {
                 width: side,
                 height: side,
                 depth,
                 id,
-            }
+            })
         })
-        .collect())
+        .collect()
 }
 
 /// The sampled texture's format and shape for a technique's codec on this adapter.

@@ -20,22 +20,30 @@
 //! - `mipmap` (`mip.wgsl`): the full mip chain by compute passes (2×2 averages, box taps for
 //!   odd sides), each level rounded to the format, then packed into the bytes of the
 //!   sampled texture's format and copied into its mip levels.
-//! - `lookup` (`lookup.wgsl` + the technique's test): per pixel the hardware sampler reads
-//!   the filtered values under the pixel's footprint, given as explicit gradients, with
-//!   tri-linear or anisotropic filtering as the paper used it.
+//! - `lookup` (`lookup.wgsl` + the technique's test): per pixel the footprint from the
+//!   camera pass's screen-space derivatives (widened to the penumbra for the soft
+//!   variants), the level of detail and the anisotropic probes along its major axis placed
+//!   as the library places them (`EXT_texture_filter_anisotropic`'s rule), each probe a
+//!   hardware tri-linear sample of the mip chain.
 //!
 //! Departures from the CPU twins: the maps are drawn by the hardware rasterizer (its
 //! rounding differs from the library's on edge texels, as for `gpu:sm`); the texture unit
-//! filters (bilinear weights at the adapter's sub-texel precision, often 8 bits; the level
-//! of detail and the anisotropic probes as the hardware approximates them, where the
-//! library follows `EXT_texture_filter_anisotropic` exactly; filtering of 8-bit and
-//! 16-bit texels at the adapter's internal precision); storage is in the GPU formats the
-//! library emulates (`Rgba8Unorm`, `Rgba16Float`, `Rgba16Unorm`, 32-bit floats); on an
-//! adapter without 16-bit normalized textures the 16-bit codes are kept in 32-bit floats
-//! (the same values, filtered at higher precision); 32-bit float maps need an adapter
-//! that filters them (`FLOAT32_FILTERABLE`). The fit and the blocker search run on the CPU
-//! over the maps read back (they are the library's, so both sides normalize alike); only
-//! the blocker search's result, a footprint a pixel, goes back up.
+//! filters within and between levels (bilinear weights at the adapter's sub-texel
+//! precision, often 8 bits; 8-bit and 16-bit texels filtered at its internal precision);
+//! storage is in the GPU formats the library emulates (`Rgba8Unorm`, `Rgba16Float`,
+//! `Rgba16Unorm`, 32-bit floats), rounded by the shaders exactly as the library rounds
+//! them, save half floats (`quantizeToF16`, the adapter's rounding); on an adapter without
+//! 16-bit normalized textures the 16-bit codes are kept in 32-bit floats (the same values,
+//! filtered at higher precision); 32-bit float maps need an adapter that filters them
+//! (`FLOAT32_FILTERABLE`), else the render is refused in one sentence. The anisotropic
+//! probes are placed by the shader rather than left to the texture unit's anisotropic
+//! mode, whose footprints are vendor-specific approximations (on Mesa's lavapipe 22 that
+//! mode gave look-ups as blurry as tri-linear ones, doubling `gpu:vsm`'s error on the
+//! bunny): so a map looks the same on every adapter, and as the library's, at the cost of up to
+//! `max-aniso` samples a look-up, as the texture unit would take. The fit and the blocker
+//! search run on the CPU over the maps read back (they are the library's own, so both
+//! sides normalize and widen alike); only the blocker search's result, one footprint a
+//! pixel, goes back up.
 
 mod fit;
 mod lookup;
