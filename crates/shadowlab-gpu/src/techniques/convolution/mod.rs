@@ -11,7 +11,7 @@
 //! levels first), so a code may differ by one.
 
 use super::filtering::{
-    Codec, FilteredTwin, Store, ENCODE_SOURCE, FILTERED, LOOKUP_SOURCE, TECH_PARAMS,
+    Codec, FilteredTwin, Store, ENCODE_SOURCE, FILTERED, LOOKUP_SOURCE, TECH_PARAMS, VIEWS,
 };
 use crate::shader::{Common, Stage, LIGHT, RAY_OFFSET};
 use shadowlab::error::Result;
@@ -39,7 +39,7 @@ const ENCODE: Stage = Stage {
 };
 const LOOKUP: Stage = Stage {
     name: "filtering/lookup.wgsl (csm)",
-    common: &[RAY_OFFSET, LIGHT, FILTERED, BASIS, RECONSTRUCTION],
+    common: &[RAY_OFFSET, LIGHT, VIEWS, FILTERED, BASIS, RECONSTRUCTION],
     source: LOOKUP_SOURCE,
 };
 

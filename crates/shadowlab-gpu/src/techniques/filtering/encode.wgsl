@@ -14,16 +14,17 @@ struct PlaneU {
     // The group of four channels written.
     group: u32,
     format: u32,
-    near: f32,
-    far: f32,
-    span: f32,
-    _pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> plane: PlaneU;
 @group(0) @binding(1) var<uniform> tech: TechU;
 @group(0) @binding(2) var depth_map: texture_2d_array<u32>;
 @group(0) @binding(3) var<storage, read_write> out: array<vec4<f32>>;
+// The fitted depth range of each view (stage `fit`'s).
+@group(0) @binding(4) var<storage, read> ranges: array<vec4<f32>>;
+
+// The view's range: near, far, span.
+var<private> range: vec4<f32>;
 
 const NO_TRIANGLE: u32 = 0xffffffffu;
 const EXPONENT_MASK: u32 = 0x7f800000u;
@@ -32,10 +33,10 @@ const EXPONENT_MASK: u32 = 0x7f800000u;
 // gives `span`.
 fn normalize_depth(bits: u32) -> f32 {
     if (bits & EXPONENT_MASK) == EXPONENT_MASK {
-        return plane.span;
+        return range.z;
     }
     let d = bitcast<f32>(bits);
-    return clamp((d - plane.near) / (plane.far - plane.near), 0.0, 1.0) * plane.span;
+    return clamp((d - range.x) / (range.y - range.x), 0.0, 1.0) * range.z;
 }
 
 fn texel_at(x: i32, y: i32) -> vec2<u32> {
@@ -67,6 +68,7 @@ fn slope(id: u32, z: f32, a: vec2<i32>, a_in: bool, b: vec2<i32>, b_in: bool) ->
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // Encoders without parameters still bind them (one layout for every technique).
     _ = tech.v[0];
+    range = ranges[plane.layer];
     let n = plane.res;
     if gid.x >= n || gid.y >= n {
         return;

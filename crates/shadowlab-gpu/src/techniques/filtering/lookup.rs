@@ -1,29 +1,17 @@
 //! Stage `lookup`: the hardware sampler over the pre-filtered maps, per pixel of the camera
 //! pass, and the technique's test.
 
+use super::fit::{filter_code, Fitted};
 use super::Codec;
 use crate::device::Gpu;
 use crate::transfer::{grid, output, read_back, storage, uniform, Timer};
 use crate::upload::LightU;
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::Result;
-use shadowlab::light::LightView;
-use shadowlab::techniques::filtering::{DepthRange, Filter, MAX_ANISOTROPY};
+use shadowlab::techniques::filtering::{Filter, MAX_ANISOTROPY};
 use shadowlab::techniques::{Frame, Stats};
 
 const WORKGROUP: u32 = 64;
-
-/// `ViewU` of `lookup.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct ViewU {
-    clip_from_world: [f32; 16],
-    light_from_world: [f32; 16],
-    ortho: u32,
-    near: f32,
-    far: f32,
-    span: f32,
-}
 
 /// `Params` of `lookup.wgsl`.
 #[repr(C)]
@@ -58,16 +46,6 @@ fn sampler(gpu: &Gpu, codec: &Codec) -> wgpu::Sampler {
     })
 }
 
-/// The view samples' screen-space derivatives, six floats a pixel.
-fn derivatives(frame: &Frame) -> Vec<f32> {
-    let v = frame.view;
-    v.dpdx
-        .iter()
-        .zip(&v.dpdy)
-        .flat_map(|(a, b)| [a.x, a.y, a.z, b.x, b.y, b.z])
-        .collect()
-}
-
 /// Looks every pixel up and reads the shadow terms back (three floats a pixel); records the
 /// stages `lookup` and `readback`.
 #[allow(clippy::too_many_arguments)]
@@ -76,12 +54,12 @@ pub(super) fn run(
     name: &str,
     frame: &Frame,
     codec: &Codec,
-    views: &[LightView],
-    ranges: &[DepthRange],
+    table: &wgpu::Buffer,
+    fitted: &Fitted,
     texture: &wgpu::Texture,
     levels: u32,
     view: &wgpu::Buffer,
-    soft: Option<&[f32]>,
+    derivs: &wgpu::Buffer,
     timer: &mut Timer,
     stats: &mut Stats,
 ) -> Result<Vec<u8>> {
@@ -95,48 +73,29 @@ pub(super) fn run(
                 count: n,
                 row,
                 groups: codec.groups(),
-                filtering: match codec.settings.filter {
-                    Filter::Bilinear => 0,
-                    Filter::Trilinear => 1,
-                    Filter::Anisotropic => 2,
-                },
-                soft: u32::from(soft.is_some()),
+                filtering: filter_code(codec.settings.filter),
+                soft: u32::from(fitted.widths.is_some()),
                 max_aniso: codec.settings.max_aniso.clamp(1, MAX_ANISOTROPY),
                 top: levels.saturating_sub(1) as f32,
                 side: codec.resolution as f32,
             };
             let params = uniform(gpu, "look-up parameters", &params);
             let tech = uniform(gpu, "technique parameters", &codec.tech);
-            let table: Vec<ViewU> = views
-                .iter()
-                .zip(ranges)
-                .map(|(v, r)| ViewU {
-                    clip_from_world: v.clip_from_world.to_cols_array(),
-                    light_from_world: v.light_from_world.to_cols_array(),
-                    ortho: u32::from(v.orthographic),
-                    near: r.near,
-                    far: r.far,
-                    span: r.span,
-                })
-                .collect();
-            let table = storage(gpu, "the light views", bytemuck::cast_slice(&table))?;
-            let derivs = storage(
-                gpu,
-                "the camera pass's derivatives",
-                bytemuck::cast_slice(&derivatives(frame)),
-            )?;
-            let soft = storage(
-                gpu,
-                "the penumbra footprints",
-                bytemuck::cast_slice(soft.unwrap_or(&[0.0])),
-            )?;
+            let dummy;
+            let soft = match &fitted.widths {
+                Some(w) => w,
+                None => {
+                    dummy = storage(gpu, "no penumbra footprints", &[0; 4])?;
+                    &dummy
+                }
+            };
             let maps = texture.create_view(&wgpu::TextureViewDescriptor {
                 dimension: Some(wgpu::TextureViewDimension::D2Array),
                 ..Default::default()
             });
             let sampler = sampler(gpu, codec);
             let p = crate::compute::pipeline(gpu, &codec.lookup, "main");
-            let buffers = [&params, &tech, &table, view, &derivs, &soft];
+            let buffers = [&params, &tech, table, view, derivs, soft];
             let mut entries = crate::compute::bind_entries(&buffers);
             entries.push(wgpu::BindGroupEntry {
                 binding: 6,
@@ -149,6 +108,10 @@ pub(super) fn run(
             entries.push(wgpu::BindGroupEntry {
                 binding: 8,
                 resource: out.as_entire_binding(),
+            });
+            entries.push(wgpu::BindGroupEntry {
+                binding: 9,
+                resource: fitted.ranges.as_entire_binding(),
             });
             let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: None,
@@ -180,7 +143,6 @@ mod tests {
 
     #[test]
     fn mirrored_structs_have_the_wgsl_sizes() {
-        assert_eq!(std::mem::size_of::<ViewU>(), 144);
         assert_eq!(std::mem::size_of::<Params>(), 80);
     }
 }

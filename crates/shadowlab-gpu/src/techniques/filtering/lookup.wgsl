@@ -10,17 +10,6 @@
 // depth `d`. Composed after shaders/common/{ray_offset, light}.wgsl, filtering/filtered.wgsl
 // and the technique's reconstruction.
 
-struct ViewU {
-    clip_from_world: mat4x4<f32>,
-    light_from_world: mat4x4<f32>,
-    // 1 for an orthographic view.
-    ortho: u32,
-    // The fitted depth range the map was normalized over.
-    near: f32,
-    far: f32,
-    span: f32,
-}
-
 struct Params {
     light: LightU,
     count: u32,
@@ -41,6 +30,7 @@ struct Params {
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<uniform> tech: TechU;
 @group(0) @binding(2) var<storage, read> views: array<ViewU>;
+@group(0) @binding(9) var<storage, read> ranges: array<RangeU>;
 @group(0) @binding(3) var<storage, read> view: array<f32>;
 @group(0) @binding(4) var<storage, read> derivs: array<f32>;
 @group(0) @binding(5) var<storage, read> soft: array<f32>;
@@ -53,7 +43,6 @@ const FILTER_TRILINEAR: u32 = 1u;
 const FILTER_ANISOTROPIC: u32 = 2u;
 const VIEW_STRIDE: u32 = 10u;
 const NO_TRIANGLE: u32 = 0xffffffffu;
-const BIG: f32 = 3.0e38;
 
 // The look-up of the pixel being shaded: map coordinates, level of detail, probes and the
 // axis they are spread along, first layer.
@@ -115,53 +104,17 @@ fn level_of_detail(dx: vec2<f32>, dy: vec2<f32>) {
     at_lambda = min(lambda, params.top);
 }
 
-// The library's `cube_face`.
-fn cube_face(d: vec3<f32>) -> u32 {
-    let a = abs(d);
-    if a.x >= a.y && a.x >= a.z {
-        return select(1u, 0u, d.x >= 0.0);
-    }
-    if a.y >= a.z {
-        return select(3u, 2u, d.y >= 0.0);
-    }
-    return select(5u, 4u, d.z >= 0.0);
-}
-
-fn project(v: ViewU, p: vec3<f32>) -> vec2<f32> {
-    let c = v.clip_from_world * vec4<f32>(p, 1.0);
-    let inv_w = 1.0 / c.w;
-    return vec2<f32>(c.x * inv_w * 0.5 + 0.5, 0.5 - c.y * inv_w * 0.5);
-}
-
-fn finite2(g: vec2<f32>) -> vec2<f32> {
-    if abs(g.x) < BIG && abs(g.y) < BIG {
-        return g;
-    }
-    return vec2<f32>(0.0);
-}
-
-// The library's `light_footprint` along one screen step `d`.
-fn footprint_axis(v: ViewU, p: vec3<f32>, d: vec3<f32>) -> vec2<f32> {
-    if v.ortho == 1u {
-        let c = v.clip_from_world * vec4<f32>(d, 0.0);
-        return finite2(vec2<f32>(0.5 * c.x, -0.5 * c.y));
-    }
-    return finite2((project(v, p + d) - project(v, p - d)) * 0.5);
-}
-
 fn shadow_term(k: u32, p: vec3<f32>) -> f32 {
-    var i = 0u;
-    if params.light.kind == LIGHT_POINT {
-        i = cube_face(p - params.light.pos_or_dir);
-    }
+    let i = view_of(params.light, p);
     let v = views[i];
+    let r = ranges[i];
     var uv = project(v, p);
     if !(abs(uv.x) < BIG && abs(uv.y) < BIG) {
         uv = vec2<f32>(0.0);
     }
-    let b = k * 6u;
-    var dx = footprint_axis(v, p, vec3<f32>(derivs[b], derivs[b + 1u], derivs[b + 2u]));
-    var dy = footprint_axis(v, p, vec3<f32>(derivs[b + 3u], derivs[b + 4u], derivs[b + 5u]));
+    let fp = pixel_footprint(v, k, p);
+    var dx = fp.xy;
+    var dy = fp.zw;
     if params.soft == 1u {
         let w = soft[k];
         if w < 0.0 {
@@ -177,10 +130,10 @@ fn shadow_term(k: u32, p: vec3<f32>) -> f32 {
     at_uv = uv;
     level_of_detail(dx, dy);
     at_layer = i * params.groups;
-    let depth = -(v.light_from_world * vec4<f32>(p, 1.0)).z;
-    var d = v.span;
+    let depth = light_depth(v, p);
+    var d = r.span;
     if abs(depth) < BIG {
-        d = clamp((depth - v.near) / (v.far - v.near), 0.0, 1.0) * v.span;
+        d = clamp((depth - r.near) / (r.far - r.near), 0.0, 1.0) * r.span;
     }
     return shade(d, i);
 }

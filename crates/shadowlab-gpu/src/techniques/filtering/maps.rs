@@ -1,16 +1,15 @@
-//! Stage `depth`: the light's maps drawn and read back for the fit, and the format of the
-//! sampled texture they are pre-filtered into.
+//! Stage `depth`: the light's maps drawn, and the format of the sampled texture they are
+//! pre-filtered into.
 
 use super::{Codec, Store};
 use crate::compute::{bind_entries, render_pipeline};
 use crate::device::Gpu;
 use crate::shader::{Stage, ALPHA_MASK, TRIANGLES};
-use crate::transfer::{read_back, uniform, Timer};
+use crate::transfer::{uniform, Timer};
 use crate::upload::SceneBuffers;
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::{Error, Result};
 use shadowlab::light::LightView;
-use shadowlab::raster::DepthBuffer;
 use shadowlab::techniques::filtering::Filter;
 use shadowlab::techniques::Frame;
 
@@ -22,8 +21,6 @@ const DEPTH: Stage = Stage {
 
 /// The format of the depth stage's colour target: a texel's depth bits and triangle.
 const TEXEL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
-/// Bytes a depth-stage texel takes.
-const TEXEL_BYTES: u32 = 8;
 
 /// `FaceU` of `depth.wgsl`.
 #[repr(C)]
@@ -170,77 +167,6 @@ pub(super) fn draw(
 pub(super) fn padded_row(width: u32, bytes: u32) -> u32 {
     (width * bytes).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
         * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
-}
-
-/// The maps drawn by [`draw`], read back as the library's depth buffers (one view at a
-/// time, so a cube's six faces never need one buffer).
-pub(super) fn read_depth(
-    gpu: &Gpu,
-    texels: &wgpu::Texture,
-    views: usize,
-    side: u32,
-) -> Result<Vec<DepthBuffer>> {
-    let row = padded_row(side, TEXEL_BYTES);
-    let bytes = u64::from(row) * u64::from(side);
-    if bytes > gpu.limits.max_buffer_size {
-        return Err(Error::Limit(format!(
-            "a filtered map of {side}² texels needs {bytes} bytes read back, over the adapter's largest buffer of {} bytes ({})",
-            gpu.limits.max_buffer_size, gpu.adapter.name
-        )));
-    }
-    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("filtered map"),
-        size: bytes.max(4),
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let word = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-    (0..views)
-        .map(|i| {
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            encoder.copy_texture_to_buffer(
-                wgpu::TexelCopyTextureInfo {
-                    texture: texels,
-                    mip_level: 0,
-                    origin: wgpu::Origin3d {
-                        x: 0,
-                        y: 0,
-                        z: i as u32,
-                    },
-                    aspect: wgpu::TextureAspect::All,
-                },
-                wgpu::TexelCopyBufferInfo {
-                    buffer: &buffer,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(row),
-                        rows_per_image: Some(side),
-                    },
-                },
-                wgpu::Extent3d {
-                    width: side,
-                    height: side,
-                    depth_or_array_layers: 1,
-                },
-            );
-            gpu.queue.submit([encoder.finish()]);
-            let raw = read_back(gpu, &buffer, bytes)?;
-            let n = (side * side) as usize;
-            let (mut depth, mut id) = (Vec::with_capacity(n), Vec::with_capacity(n));
-            for r in raw.chunks_exact(row as usize) {
-                for t in r[..(side * TEXEL_BYTES) as usize].chunks_exact(8) {
-                    depth.push(f32::from_bits(word(&t[..4])));
-                    id.push(word(&t[4..]));
-                }
-            }
-            Ok(DepthBuffer {
-                width: side,
-                height: side,
-                depth,
-                id,
-            })
-        })
-        .collect()
 }
 
 /// The sampled texture's format and shape for a technique's codec on this adapter.

@@ -9,10 +9,12 @@
 //! - `depth` (`depth.wgsl`, [`maps`]): the hardware rasterizer draws each light view's map
 //!   (the library's `light_views`; six cube faces as layers for a point light), keeping
 //!   each texel's linear depth and triangle.
-//! - `fit` ([`fit`]): the depth range each map is normalized over, fitted to the receivers
-//!   by the library's own `ReceiverDepths` and `DepthRange::fitted` over the maps read back,
-//!   and, for the soft variants, each pixel's penumbra footprint from the library's blocker
-//!   search (`SoftSearch`) over the same maps.
+//! - `fit` (`fit.wgsl`, [`fit`]): each map's min-depth pyramid (`pyramid.wgsl`), and the
+//!   depth range each map is normalized over, fitted to the receivers that may be shadowed
+//!   as the library's `ReceiverDepths` and `DepthRange::fitted` fit it (minima, maxima and
+//!   counts through integer atomics, so independent of the threads' order).
+//! - `blocker_search` (`blocker_search.wgsl`, the soft variants under an area light): each
+//!   pixel's penumbra footprint, as the library's `SoftSearch` finds it over the pyramid.
 //! - `encode` (`encode.wgsl` + the technique's encoder): a compute pass per view and group
 //!   of four channels writes the stored values, rounded to the storage format.
 //! - `blur` (`blur.wgsl`): the separable binomial blur as two compute passes, each written
@@ -41,18 +43,18 @@
 //! mode gave look-ups as blurry as tri-linear ones, doubling `gpu:vsm`'s error on the
 //! bunny): so a map looks the same on every adapter, and as the library's, at the cost of up to
 //! `max-aniso` samples a look-up, as the texture unit would take. The fit and the blocker
-//! search run on the CPU over the maps read back (they are the library's own, so both
-//! sides normalize and widen alike); only the blocker search's result, one footprint a
-//! pixel, goes back up.
+//! search compute in f32 where the library sums blocker depths in f64 and multiplies by
+//! reciprocals; nothing is read back before the look-up.
 
 mod fit;
+pub use fit::VIEWS;
 mod lookup;
 mod maps;
 mod prefilter;
 
 use crate::device::{shared, Gpu};
 use crate::shader::{Common, Stage};
-use crate::transfer::Timer;
+use crate::transfer::{storage, Timer};
 use crate::upload::{view_buffer, SceneBuffers, SceneKey};
 use shadowlab::error::{Error, Result};
 use shadowlab::light::light_views;
@@ -72,6 +74,16 @@ pub const ENCODE_SOURCE: &str = include_str!("encode.wgsl");
 /// The text of stage `lookup`, composed after the light's files, [`FILTERED`] and a
 /// technique's encoder and test.
 pub const LOOKUP_SOURCE: &str = include_str!("lookup.wgsl");
+
+/// The view samples' screen-space derivatives, six floats a pixel.
+fn derivatives(frame: &Frame) -> Vec<f32> {
+    let v = frame.view;
+    v.dpdx
+        .iter()
+        .zip(&v.dpdy)
+        .flat_map(|(a, b)| [a.x, a.y, a.z, b.x, b.y, b.z])
+        .collect()
+}
 
 /// Numbers a technique's parameter block holds (`TechU` of `filtered.wgsl`).
 pub const TECH_PARAMS: usize = 40;
@@ -257,18 +269,23 @@ impl ShadowTechnique for GpuFiltered {
                 )
             })
         })?;
-        let cpu_maps = stats.stage("readback_maps", || {
-            gpu.stage(name, "readback_maps", || {
-                maps::read_depth(&gpu, &depth, views.len(), side)
+        let table = fit::view_table(&gpu, &views)?;
+        let derivs = storage(
+            &gpu,
+            "the camera pass's derivatives",
+            bytemuck::cast_slice(&derivatives(frame)),
+        )?;
+        let fitted = stats.stage("fit", || {
+            gpu.stage(name, "fit", || {
+                fit::run(
+                    &gpu, frame, &codec, &views, &table, &depth, &view, &derivs, &mut timer,
+                )
             })
         })??;
-        let ranges = fit::ranges(frame, &views, &cpu_maps, &codec, &mut stats);
-        let soft = stats.stage("blocker_search", || {
-            fit::soft_widths(frame, &codec.settings, &views, &cpu_maps)
-        });
         let texture = stats.stage("prefilter", || {
             gpu.stage(name, "prefilter", || {
-                prefilter::prefilter(&gpu, &codec, &format, &depth, &ranges, &mut timer)
+                let n = views.len() as u32;
+                prefilter::prefilter(&gpu, &codec, &format, &depth, n, &fitted.ranges, &mut timer)
             })
         })??;
         let raw = lookup::run(
@@ -276,20 +293,23 @@ impl ShadowTechnique for GpuFiltered {
             name,
             frame,
             &codec,
-            &views,
-            &ranges,
+            &table,
+            &fitted,
             &texture,
             format.levels,
             &view,
-            soft.as_deref(),
+            &derivs,
             &mut timer,
             &mut stats,
         )?;
+        stats.count("shadowable_share", fitted.shadowable_share(&gpu)?);
         for (stage, ms) in timer.read(&gpu)? {
             stats.count(&format!("gpu_{stage}_ms"), ms);
         }
+        // The depth maps (linear depth and triangle a texel) the soft variants keep for
+        // the blocker search, as the library counts them.
         let kept: u64 = if codec.settings.soft {
-            cpu_maps.iter().map(|m| m.memory_bytes() as u64).sum()
+            views.len() as u64 * u64::from(side).pow(2) * 8
         } else {
             0
         };

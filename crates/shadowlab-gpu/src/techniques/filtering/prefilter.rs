@@ -9,7 +9,7 @@ use crate::shader::Stage;
 use crate::transfer::{storage, uniform, Timer};
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::Result;
-use shadowlab::techniques::filtering::{binomial_weights, DepthRange};
+use shadowlab::techniques::filtering::binomial_weights;
 
 const BLUR: Stage = Stage {
     name: "filtering/blur.wgsl",
@@ -31,10 +31,6 @@ pub(super) struct PlaneU {
     layer: u32,
     group: u32,
     format: u32,
-    near: f32,
-    far: f32,
-    span: f32,
-    pad: u32,
 }
 
 /// `BlurU` of `blur.wgsl`.
@@ -125,7 +121,8 @@ pub(super) fn prefilter(
     codec: &Codec,
     f: &Format,
     texels: &wgpu::Texture,
-    ranges: &[DepthRange],
+    views: u32,
+    ranges: &wgpu::Buffer,
     timer: &mut Timer,
 ) -> Result<wgpu::Texture> {
     let groups = codec.groups();
@@ -134,7 +131,7 @@ pub(super) fn prefilter(
         size: wgpu::Extent3d {
             width: f.side,
             height: f.side,
-            depth_or_array_layers: ranges.len() as u32 * groups,
+            depth_or_array_layers: views * groups,
         },
         mip_level_count: f.levels,
         sample_count: 1,
@@ -150,18 +147,14 @@ pub(super) fn prefilter(
         dimension: Some(wgpu::TextureViewDimension::D2Array),
         ..Default::default()
     });
-    for (i, r) in ranges.iter().enumerate() {
+    for i in 0..views {
         for g in 0..groups {
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             let plane = PlaneU {
                 res: f.side,
-                layer: i as u32,
+                layer: i,
                 group: g,
                 format: codec.store.code(),
-                near: r.near,
-                far: r.far,
-                span: r.span,
-                pad: 0,
             };
             encode_pass(
                 gpu,
@@ -170,6 +163,7 @@ pub(super) fn prefilter(
                 &plane,
                 &tech,
                 &depth_view,
+                ranges,
                 &work,
                 timer,
             );
@@ -194,7 +188,7 @@ pub(super) fn prefilter(
                         origin: wgpu::Origin3d {
                             x: 0,
                             y: 0,
-                            z: i as u32 * groups + g,
+                            z: i * groups + g,
                         },
                         aspect: wgpu::TextureAspect::All,
                     },
@@ -224,6 +218,7 @@ fn encode_pass(
     plane: &PlaneU,
     tech: &wgpu::Buffer,
     depth_view: &wgpu::TextureView,
+    ranges: &wgpu::Buffer,
     work: &Work,
     timer: &mut Timer,
 ) {
@@ -248,6 +243,10 @@ fn encode_pass(
             wgpu::BindGroupEntry {
                 binding: 3,
                 resource: work.levels.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: ranges.as_entire_binding(),
             },
         ],
     });
@@ -365,7 +364,7 @@ mod tests {
 
     #[test]
     fn mirrored_structs_have_the_wgsl_sizes() {
-        assert_eq!(std::mem::size_of::<PlaneU>(), 32);
+        assert_eq!(std::mem::size_of::<PlaneU>(), 16);
         assert_eq!(std::mem::size_of::<BlurU>(), 16);
         assert_eq!(std::mem::size_of::<MipU>(), 48);
     }

@@ -14,7 +14,7 @@
 //! bound is solved in f32 as the paper's shader does (the library: f64).
 
 use super::filtering::{
-    Codec, FilteredTwin, Store, ENCODE_SOURCE, FILTERED, LOOKUP_SOURCE, TECH_PARAMS,
+    Codec, FilteredTwin, Store, ENCODE_SOURCE, FILTERED, LOOKUP_SOURCE, TECH_PARAMS, VIEWS,
 };
 use super::variance::CHEBYSHEV;
 use crate::shader::{Common, Stage, LIGHT, RAY_OFFSET};
@@ -59,7 +59,7 @@ const EVSM_ENCODE: Stage = Stage {
 const EVSM_LOOKUP: Stage = Stage {
     name: "filtering/lookup.wgsl (evsm)",
     common: &[
-        RAY_OFFSET, LIGHT, FILTERED, EVSM_WARP, CHEBYSHEV, EVSM_BOUND,
+        RAY_OFFSET, LIGHT, VIEWS, FILTERED, EVSM_WARP, CHEBYSHEV, EVSM_BOUND,
     ],
     source: LOOKUP_SOURCE,
 };
@@ -70,7 +70,7 @@ const MSM_ENCODE: Stage = Stage {
 };
 const MSM_LOOKUP: Stage = Stage {
     name: "filtering/lookup.wgsl (msm)",
-    common: &[RAY_OFFSET, LIGHT, FILTERED, MSM_QUANTIZE, HAMBURGER],
+    common: &[RAY_OFFSET, LIGHT, VIEWS, FILTERED, MSM_QUANTIZE, HAMBURGER],
     source: LOOKUP_SOURCE,
 };
 

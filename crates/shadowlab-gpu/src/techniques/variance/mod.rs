@@ -8,7 +8,7 @@
 //! variance floor and the light-bleeding reduction, as the library's.
 
 use super::filtering::{
-    Codec, FilteredTwin, Store, ENCODE_SOURCE, FILTERED, LOOKUP_SOURCE, TECH_PARAMS,
+    Codec, FilteredTwin, Store, ENCODE_SOURCE, FILTERED, LOOKUP_SOURCE, TECH_PARAMS, VIEWS,
 };
 use crate::shader::{Common, Stage, LIGHT, RAY_OFFSET};
 use shadowlab::error::Result;
@@ -42,7 +42,15 @@ const ENCODE: Stage = Stage {
 };
 const LOOKUP: Stage = Stage {
     name: "filtering/lookup.wgsl (vsm)",
-    common: &[RAY_OFFSET, LIGHT, FILTERED, MOMENTS, CHEBYSHEV, RECONSTRUCT],
+    common: &[
+        RAY_OFFSET,
+        LIGHT,
+        VIEWS,
+        FILTERED,
+        MOMENTS,
+        CHEBYSHEV,
+        RECONSTRUCT,
+    ],
     source: LOOKUP_SOURCE,
 };
 
