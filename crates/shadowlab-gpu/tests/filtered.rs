@@ -127,3 +127,30 @@ fn bad_parameters_name_the_gpu_technique() {
     }
     assert_eq!(t.params()["soft"], serde_json::Value::from(true));
 }
+
+/// Under a spot light (one perspective view; the verdict scenes have directional and point
+/// lights) every filtered technique is judged as under the others.
+#[test]
+fn gpu_filtered_maps_match_under_a_spot_light() {
+    if !have_gpu("gpu filtered spot light") {
+        return;
+    }
+    let s = shadowlab::scene::load("chessboard", &Default::default()).unwrap();
+    let b = s.bounds;
+    let c = b.center();
+    let size = (b.max - b.min).max_element();
+    let spot = shadowlab::light::Light::Spot {
+        position: c + shadowlab::math::vec3(0.4, 1.2, 0.6) * size,
+        target: c,
+        fov_deg: 60.0,
+    };
+    let set = support::framed(s, 128, 96, Some(spot));
+    for t in ["vsm", "evsm", "msm", "csm"] {
+        let gpu = format!("gpu:{t}");
+        let v = verdict("chessboard (spot)", &set, &gpu, t, &[RESOLUTION], SPP);
+        eprintln!(
+            "chessboard (spot): {gpu} {:.5}, {t} {:.5}",
+            v.errors.0, v.errors.1
+        );
+    }
+}
