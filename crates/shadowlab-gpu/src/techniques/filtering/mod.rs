@@ -6,10 +6,10 @@
 //! [`Codec`]: channels, storage format, parameters; everything else is here.
 //!
 //! Stages, in the order a frame runs them:
-//! - `depth` (`depth.wgsl`, [`maps`]): the hardware rasterizer draws each light view's map
+//! - `depth` (`depth.wgsl`, `maps.rs`): the hardware rasterizer draws each light view's map
 //!   (the library's `light_views`; six cube faces as layers for a point light), keeping
 //!   each texel's linear depth and triangle.
-//! - `fit` (`fit.wgsl`, [`fit`]): each map's min-depth pyramid (`pyramid.wgsl`), and the
+//! - `fit` (`fit.wgsl`, `fit.rs`): each map's min-depth pyramid (`pyramid.wgsl`), and the
 //!   depth range each map is normalized over, fitted to the receivers that may be shadowed
 //!   as the library's `ReceiverDepths` and `DepthRange::fitted` fit it (minima, maxima and
 //!   counts through integer atomics, so independent of the threads' order).
@@ -44,7 +44,10 @@
 //! bunny): so a map looks the same on every adapter, and as the library's, at the cost of up to
 //! `max-aniso` samples a look-up, as the texture unit would take. The fit and the blocker
 //! search compute in f32 where the library sums blocker depths in f64 and multiplies by
-//! reciprocals; nothing is read back before the look-up.
+//! reciprocals; nothing is read back before the look-up. The work buffers (every mip
+//! level of one view's group as `vec4<f32>`s, every view's min pyramid) are single storage
+//! bindings, so a map side whose buffers pass the adapter's largest binding is refused in
+//! one sentence (lavapipe's 128 MiB holds a point light's six 2048² faces, not 4096²).
 
 mod fit;
 pub use fit::VIEWS;
