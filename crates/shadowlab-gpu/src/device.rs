@@ -167,11 +167,12 @@ impl Gpu {
         let record = AdapterRecord::of(&adapter.get_info());
         let limits = adapter.limits();
         let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
-        let features = if timestamps {
-            wgpu::Features::TIMESTAMP_QUERY
-        } else {
-            wgpu::Features::empty()
-        };
+        // Optional features, taken where the adapter has them: timestamps, and the formats
+        // the filtered maps sample (filterable 32-bit floats, 16-bit normalized moments).
+        let features = adapter.features()
+            & (wgpu::Features::TIMESTAMP_QUERY
+                | wgpu::Features::FLOAT32_FILTERABLE
+                | wgpu::Features::TEXTURE_FORMAT_16BIT_NORM);
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("shadowlab"),

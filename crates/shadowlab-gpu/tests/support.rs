@@ -156,3 +156,52 @@ pub fn verdict(scene: &str, set: &Set, gpu: &str, cpu: &str, params: &[&str], sp
         errors: (eg, ec),
     }
 }
+
+/// Judges `gpu` beside `cpu` under `scene`'s own area light (a built-in scene with one, at
+/// 128 × 96), both with `params`: two GPU runs give the same bits, and the GPU's mean
+/// error against the area-light reference of `samples` light samples a point is within
+/// [`ERROR_FACTOR`] of the CPU's or [`ERROR_ABS`]. Returns the errors (GPU, CPU).
+pub fn soft_verdict(
+    scene: &str,
+    gpu: &str,
+    cpu: &str,
+    params: &[&str],
+    samples: u32,
+) -> (f64, f64) {
+    use shadowlab::techniques::{self, Frame};
+    shadowlab_gpu::register();
+    let (s, c, l, view) = builtin(scene, 128, 96, None);
+    let area = s.area_light.expect("a scene with an area light");
+    let frame = Frame::new(&s, &c, &l, &view).with_area(Some(&area), samples);
+    let make = |name: &str| {
+        let mut t = techniques::create(name).unwrap();
+        for p in params {
+            let (k, v) = p.split_once('=').unwrap();
+            t.set_param(k, v).unwrap();
+        }
+        t
+    };
+    let a = make(gpu).render(&frame).unwrap();
+    let b = make(gpu).render(&frame).unwrap();
+    assert!(
+        a.visibility.value == b.visibility.value,
+        "{scene}: two runs of {gpu} differ"
+    );
+    let cpu_shadows = make(cpu).render(&frame).unwrap();
+    let reference = shadowlab::reference::Reference::build(&s);
+    let truth = shadowlab::soft_reference::soft_visibility(
+        &reference,
+        &frame,
+        &area,
+        samples,
+        &[shadowlab::math::vec2(0.5, 0.5)],
+    );
+    let eg = shadowlab::compare::compare(&view, &a.visibility, &truth.visibility).mean_abs_error;
+    let ec = shadowlab::compare::compare(&view, &cpu_shadows.visibility, &truth.visibility)
+        .mean_abs_error;
+    assert!(
+        (eg - ec).abs() <= (ERROR_FACTOR * ec).max(ERROR_ABS),
+        "{scene}: {gpu}'s error {eg} against the soft reference is not within 10% of {cpu}'s {ec} (or {ERROR_ABS})"
+    );
+    (eg, ec)
+}

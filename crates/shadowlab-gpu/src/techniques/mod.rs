@@ -3,13 +3,22 @@
 
 pub mod alias_free;
 pub mod cascaded;
+pub mod convolution;
+pub mod filtering;
 pub mod lispsm;
 mod maps;
+pub mod moments;
 pub mod perspective;
 pub mod raytrace;
 pub mod shadow_map;
+pub mod variance;
 
+use filtering::GpuFiltered;
 use shadowlab::error::{Error, Result};
+use shadowlab::techniques::convolution::Convolution;
+use shadowlab::techniques::moments::evsm::ExponentialVariance;
+use shadowlab::techniques::moments::msm::MomentShadowMap;
+use shadowlab::techniques::variance::Variance;
 use shadowlab::techniques::ShadowTechnique;
 
 /// Every GPU technique's name, in the order reports list them.
@@ -21,6 +30,14 @@ pub const ALL: &[&str] = &[
     perspective::NAME,
     lispsm::NAME,
     cascaded::NAME,
+    variance::VSM,
+    moments::EVSM,
+    moments::MSM,
+    convolution::CSM,
+    variance::VSM_SOFT,
+    moments::EVSM_SOFT,
+    moments::MSM_SOFT,
+    convolution::CSM_SOFT,
 ];
 
 /// A GPU technique by name (`gpu:raytrace`, …), with the defaults of its CPU twin.
@@ -33,6 +50,30 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
         perspective::NAME => Box::new(perspective::GpuPsm::default()),
         lispsm::NAME => Box::new(lispsm::GpuLispsm::default()),
         cascaded::NAME => Box::new(cascaded::GpuCascaded::default()),
+        variance::VSM => filtered(variance::VSM, Box::new(Variance::default()), false),
+        variance::VSM_SOFT => filtered(variance::VSM_SOFT, Box::new(Variance::default()), true),
+        moments::EVSM => filtered(
+            moments::EVSM,
+            Box::new(ExponentialVariance::default()),
+            false,
+        ),
+        moments::EVSM_SOFT => filtered(
+            moments::EVSM_SOFT,
+            Box::new(ExponentialVariance::default()),
+            true,
+        ),
+        moments::MSM => filtered(moments::MSM, Box::new(MomentShadowMap::default()), false),
+        moments::MSM_SOFT => filtered(
+            moments::MSM_SOFT,
+            Box::new(MomentShadowMap::default()),
+            true,
+        ),
+        convolution::CSM => filtered(convolution::CSM, Box::new(Convolution::default()), false),
+        convolution::CSM_SOFT => filtered(
+            convolution::CSM_SOFT,
+            Box::new(Convolution::default()),
+            true,
+        ),
         _ => {
             return Err(Error::param(format!(
                 "unknown GPU technique {name:?}: the GPU techniques are {}",
@@ -40,4 +81,14 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
             )))
         }
     })
+}
+
+/// A filtered map (`gpu:vsm`, `gpu:msm-soft`, …) on the shared filtering chain, with its CPU
+/// twin at its defaults (`soft`: the twin's blocker-search penumbrae).
+fn filtered(
+    name: &'static str,
+    twin: Box<dyn filtering::FilteredTwin>,
+    soft: bool,
+) -> Box<dyn ShadowTechnique> {
+    Box::new(GpuFiltered::new(name, twin, soft))
 }
