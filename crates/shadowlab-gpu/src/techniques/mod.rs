@@ -1,6 +1,7 @@
 //! The `gpu:` techniques: one folder per technique, mirroring the library's technique
 //! folders, and the registry that creates them by name.
 
+pub mod adaptive;
 pub mod alias_free;
 pub mod raytrace;
 pub mod shadow_map;
@@ -14,6 +15,7 @@ pub const ALL: &[&str] = &[
     shadow_map::PCF,
     raytrace::NAME,
     alias_free::NAME,
+    adaptive::NAME,
 ];
 
 /// A GPU technique by name (`gpu:raytrace`, …), with the defaults of its CPU twin.
@@ -23,6 +25,7 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
         shadow_map::PCF => Box::new(shadow_map::GpuShadowMap::pcf()),
         raytrace::NAME => Box::new(raytrace::GpuRayTrace::default()),
         alias_free::NAME => Box::new(alias_free::GpuAliasFree::default()),
+        adaptive::NAME => Box::new(adaptive::GpuAdaptive::default()),
         _ => {
             return Err(Error::param(format!(
                 "unknown GPU technique {name:?}: the GPU techniques are {}",
