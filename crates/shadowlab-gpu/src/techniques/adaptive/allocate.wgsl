@@ -1,10 +1,10 @@
 // gpu:asm, stage `allocate`: the page table's side of the LRU allocation. The driver has
 // given each requested page a slot of the physical pool (free slots first, then the least
-// recently used, never one used this frame; requests taken in table order, coarsest level
-// first), so the result does not depend on the order in which threads ran. `apply` writes
+// recently used, never one used this frame; requests taken by benefit, ties in table
+// order), so the result does not depend on the order in which threads ran. `apply` writes
 // the new entries into the page table and empties the entries of the pages they evict;
-// `clear` fills the new pages' texels with an empty map (no caster: the farthest depth and
-// no triangle) before `render` draws into them.
+// `clear` fills the new pages' texels with an empty map (no triangle) before `render`
+// draws into them.
 
 struct AllocU {
     // Updates (or pages to clear).
@@ -23,7 +23,6 @@ struct Update {
 }
 
 const NO_ENTRY: u32 = 0xffffffffu;
-const FAR: f32 = 3.0e38;
 const NO_ID: u32 = 0xffffffffu;
 
 @group(0) @binding(0) var<uniform> au: AllocU;
@@ -46,8 +45,7 @@ fn apply(@builtin(global_invocation_id) gid: vec3<u32>) {
 // `clear`'s bindings follow `apply`'s, so the two entry points share one module.
 @group(0) @binding(3) var<uniform> cu: AllocU;
 @group(0) @binding(4) var<storage, read> slots: array<u32>;
-@group(0) @binding(5) var depth_out: texture_storage_2d<r32float, write>;
-@group(0) @binding(6) var id_out: texture_storage_2d<r32uint, write>;
+@group(0) @binding(5) var id_out: texture_storage_2d<r32uint, write>;
 
 // One thread a texel of the new pages.
 @compute @workgroup_size(64)
@@ -61,6 +59,5 @@ fn clear(@builtin(global_invocation_id) gid: vec3<u32>) {
     let r = t % per;
     let x = (s % cu.atlas_cols) * cu.page + r % cu.page;
     let y = (s / cu.atlas_cols) * cu.page + r / cu.page;
-    textureStore(depth_out, vec2<i32>(i32(x), i32(y)), vec4<f32>(FAR, 0.0, 0.0, 0.0));
     textureStore(id_out, vec2<i32>(i32(x), i32(y)), vec4<u32>(NO_ID, 0u, 0u, 0u));
 }

@@ -5,9 +5,10 @@
 // finest resident page covering it, stamps that page's slot with the frame's clock (the
 // LRU's use), and when that page is coarser than wanted and the 2×2 texels around the
 // receiver disagree on its shadow test (it straddles a shadow boundary), requests the page
-// one level finer. A request is recorded once per page: the first thread to raise the
-// page's flag appends its entry to the list; the list's order depends on the threads', so
-// the driver sorts it before allocating. Composed after shaders/common/{ray_offset,
+// one level finer. Each page's flag counts the receivers that request it (the paper's
+// benefit: mismatched pixels that straddle a boundary), and the first to raise it appends
+// the page's entry to the list; `tally` then reads each listed page's count. The list's
+// order depends on the threads', the counts do not: the driver sorts before allocating. Composed after shaders/common/{ray_offset,
 // light}.wgsl and pages.wgsl.
 
 @group(0) @binding(0) var<uniform> vp: VirtualU;
@@ -16,8 +17,9 @@
 // dpdx then dpdy of each pixel, six floats.
 @group(0) @binding(3) var<storage, read> footprints: array<f32>;
 @group(0) @binding(4) var<storage, read> table: array<u32>;
-@group(0) @binding(5) var pool_depth: texture_2d<f32>;
-@group(0) @binding(6) var pool_id: texture_2d<u32>;
+@group(0) @binding(5) var pool_id: texture_2d<u32>;
+// Nine floats a triangle.
+@group(0) @binding(6) var<storage, read> tris: array<f32>;
 @group(0) @binding(7) var<storage, read_write> flags: array<atomic<u32>>;
 // [0]: the number of requests; then the requested entries.
 @group(0) @binding(8) var<storage, read_write> requests: array<atomic<u32>>;
@@ -30,7 +32,7 @@ fn wanted_level(wanted: f32) -> u32 {
 }
 
 // True when the 2×2 texels of level `l` whose centres surround `uv` disagree on the test.
-fn straddles(f: u32, l: u32, uv: vec2<f32>, own: u32, biased: f32) -> bool {
+fn straddles(f: u32, l: u32, uv: vec2<f32>, own: u32, p: vec3<f32>, depth: f32, bias: f32) -> bool {
     let n = texels_across(l);
     let last = f32(n - 1u);
     let x0 = clamp(floor(uv.x * f32(n) - 0.5), 0.0, last);
@@ -42,14 +44,14 @@ fn straddles(f: u32, l: u32, uv: vec2<f32>, own: u32, biased: f32) -> bool {
     let c10 = vec2<f32>(x1 + 0.5, y0 + 0.5) * inv;
     let c01 = vec2<f32>(x0 + 0.5, y1 + 0.5) * inv;
     let c11 = vec2<f32>(x1 + 0.5, y1 + 0.5) * inv;
-    let a = lit_at(finest_resident(f, l, c00), c00, own, biased);
-    return a != lit_at(finest_resident(f, l, c10), c10, own, biased)
-        || a != lit_at(finest_resident(f, l, c01), c01, own, biased)
-        || a != lit_at(finest_resident(f, l, c11), c11, own, biased);
+    let a = lit_at(finest_resident(f, l, c00), c00, own, f, p, depth, bias);
+    return a != lit_at(finest_resident(f, l, c10), c10, own, f, p, depth, bias)
+        || a != lit_at(finest_resident(f, l, c01), c01, own, f, p, depth, bias)
+        || a != lit_at(finest_resident(f, l, c11), c11, own, f, p, depth, bias);
 }
 
 fn request(e: u32) {
-    if atomicExchange(&flags[e], 1u) == 0u {
+    if atomicAdd(&flags[e], 1u) == 0u {
         let i = atomicAdd(&requests[0], 1u);
         atomicStore(&requests[1u + i], e);
     }
@@ -98,10 +100,22 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let dir = shadow_ray(vp.light, p).dir;
-    let biased = depth - level_bias(f, h.level, depth, n, dir);
-    if straddles(f, h.level, uv, own, biased) {
+    let bias = level_bias(f, h.level, depth, n, dir);
+    if straddles(f, h.level, uv, own, p, depth, bias) {
         let l = h.level - 1u;
         let m = texels_across(l);
         request(entry_of(f, l, texel_index(uv.x, m), texel_index(uv.y, m)));
     }
+}
+
+// Each listed request's benefit, once `main` has finished.
+@group(0) @binding(10) var<storage, read_write> benefits: array<u32>;
+
+@compute @workgroup_size(64)
+fn tally(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.y * vp.row + gid.x;
+    if i >= atomicLoad(&requests[0]) {
+        return;
+    }
+    benefits[i] = atomicLoad(&flags[atomicLoad(&requests[1u + i])]);
 }

@@ -4,10 +4,11 @@
 //! Each light view (one for directional and spot lights, six cube faces for a point light)
 //! has a virtual map far larger than memory, whose mip levels play the paper's hierarchy
 //! levels: level `levels - 1`, the coarsest, has the CPU's root resolution and is always
-//! resident; each finer level doubles it, down to level 0 at [`REFINED_LEVELS`] doublings.
-//! Every level is cut into pages of `tile-resolution` texels; a page table (4 bytes a page
-//! of every level and view, coarsest level first) maps the resident ones to slots of a
-//! physical pool, one atlas of depth and triangle-id textures sized by `budget-mb`.
+//! resident; each finer level doubles it, down to level 0 at [`REFINED_LEVELS`] doublings
+//! (65536² texels for a 512² root). Every level is cut into pages of `tile-resolution`
+//! texels; a page table (4 bytes a page of every level and view, coarsest level first) maps
+//! the resident ones to slots of a physical pool, one atlas of triangle ids within
+//! `budget-mb`.
 //!
 //! # A frame
 //! Up to `passes` times:
@@ -17,19 +18,21 @@
 //!    it reads the finest resident page over it, stamps that page's slot with the frame's
 //!    clock, and where that page is coarser than wanted and the 2×2 texels around the
 //!    receiver disagree on its shadow test (it straddles a boundary), requests the page one
-//!    level finer. Requests come back as a set.
-//! 2. **allocate** (`allocate.wgsl` and [`pool`]): the requests, in table order (coarsest
-//!    first), take free slots, then the least recently read slots not read this frame
-//!    (LRU eviction; ties by slot), at most `max-new-nodes` a frame; the page table gets
-//!    the new entries and loses the evicted ones, and the new pages are emptied.
+//!    level finer. Requests come back as a set, each with its benefit (the paper's: the
+//!    requesting receivers, mismatched pixels that straddle a boundary).
+//! 2. **allocate** (`allocate.wgsl` and [`pool`]): the requests, by decreasing benefit
+//!    (ties in table order, coarsest level first), take free slots, then the least
+//!    recently read slots not read this frame (LRU eviction; ties by slot), at most
+//!    `max-new-nodes` a frame; the page table gets the new entries and loses the evicted
+//!    ones, and the new pages are emptied.
 //! 3. **render** (`render.wgsl`): the hardware rasterizer draws each new page into its slot
 //!    (one render pass, a viewport a page) through the page's own `clip_from_world`,
-//!    writing linear depth and triangle id.
+//!    keeping the nearest triangle's id.
 //!
 //! Then **lookup** (`lookup.wgsl`): every receiver reads the finest resident page over it
-//! and applies Section 4.2's test (lit when the texel holds its own triangle, else when its
-//! depth less the bias of that level's texel is not behind the texel's). A pass that
-//! allocates nothing ends the frame's refinement.
+//! and applies Section 4.2's test: lit when the texel holds its own triangle, else when the
+//! texel's triangle lies no more than the bias of that level's texel in front of it along
+//! its shadow ray. A pass that allocates nothing ends the frame's refinement.
 //!
 //! Pages live across frames: a walkthrough (`render --frames N`) starts each frame from the
 //! pages the last left, so it refines instead of starting over. A different scene or light,
@@ -38,9 +41,9 @@
 //! # Parameters (the CPU `asm`'s table and defaults), read for a virtual map
 //! - `root-resolution`: the coarsest level's side (a point light's faces get half, as on
 //!   the CPU), always resident: it must fit the budget. `tile-resolution`: the page side,
-//!   which must divide it. `budget-mb`: the pool (depth and id, 8 bytes a texel);
-//!   `memory_bytes` is the pool. The page table, request list and the render pass's depth
-//!   buffer (of the pool's size) are counted apart (`page_table_bytes`, `scratch_bytes`).
+//!   which must divide it. `budget-mb`: the pool (4 bytes a texel); `memory_bytes` is the
+//!   pool. The page table with its request counts, and the render pass's depth buffer (of
+//!   the pool's size), are counted apart (`page_table_bytes`, `scratch_bytes`).
 //! - `max-new-nodes`: new pages a frame at most; `passes`: analysis rounds a frame;
 //!   `oversampling`, `bias`, `slope-bias`: as on the CPU, the bias in texels of the level
 //!   read.
@@ -48,19 +51,29 @@
 //!   refines texels by 2 (a mip chain), not by `cells`. `analysis-fraction` is not read:
 //!   every pixel is analysed in every pass, one compute dispatch where the CPU spreads its
 //!   work over frames. `time-budget-ms` and the cost terms are not read: the GPU draws
-//!   every page it allocates (capped by `max-new-nodes`) instead of ranking cells by a
-//!   predicted cost.
+//!   every page it allocates (capped by `max-new-nodes`) instead of spending a predicted
+//!   time.
 //!
 //! # Departures from the CPU twin
-//! The hierarchy differs (mip levels of pages by 2 where the CPU's nodes refine by
-//! `cells`; requests for the page one level finer rather than for cells ranked by benefit;
-//! LRU alone, where the CPU also keeps leaves of greater benefit when all are in use), the
-//! finest level is [`REFINED_LEVELS`] doublings above the root where the CPU goes to
-//! 2²⁰ texels (the page table is dense), every pixel is analysed each pass, and the pages
-//! are drawn by the hardware rasterizer, which rounds coverage and depth a little
-//! differently. So images differ from the CPU's, and the verdict tests judge the error
-//! against the ray-traced reference with the bounds they name. Results are bit-identical
-//! across runs: the requests are a set, and slots are given in table order.
+//! - The hierarchy: mip levels of pages refining by 2 where the CPU's nodes refine by
+//!   `cells`; a receiver asks for the page one level finer than it reads, where the CPU
+//!   refines cells ranked by benefit over cost; LRU eviction alone, where the CPU also
+//!   keeps leaves of greater benefit when all are in use. The finest level is
+//!   [`REFINED_LEVELS`] doublings above the root where the CPU goes to 2²⁰ texels: the page
+//!   table is dense (4 bytes a page at every level, and as much again for the requests'
+//!   counts).
+//! - The pool keeps triangle ids alone (4 bytes a texel where the CPU keeps a depth and an
+//!   id, 8), so a budget holds twice the texels: a texel's depth is that of its triangle's
+//!   plane where the receiver's shadow ray meets it, rather than the depth at the texel's
+//!   centre. This drops the depth sampling error of the paper's test (the plane is exact
+//!   where the triangle covers the ray) and keeps its bias for the rest.
+//! - Every pixel is analysed in each pass, and the pages are drawn by the hardware
+//!   rasterizer, which rounds coverage a little differently from the library's.
+//!
+//! So images differ from the CPU's, and the verdict tests judge the error against the
+//! ray-traced reference with the bounds they name. Results are bit-identical across runs:
+//! the requests are a set with order-independent counts, and slots are given by benefit,
+//! ties in table order.
 
 mod passes;
 mod pool;
@@ -84,12 +97,12 @@ use std::sync::Arc;
 pub const NAME: &str = "gpu:asm";
 
 /// Mip levels finer than the root: the finest level is the root side times 2^this.
-pub const REFINED_LEVELS: u32 = 6;
+pub const REFINED_LEVELS: u32 = 7;
 
 const WORKGROUP: u32 = 64;
 
-/// Bytes of a pool texel: a 32-bit depth and a 32-bit triangle id.
-const TEXEL_BYTES: u64 = 8;
+/// Bytes of a pool texel: a 32-bit triangle id.
+const TEXEL_BYTES: u64 = 4;
 
 // The stage names carry the folder: the device keeps pipelines by stage name and entry
 // point, and `gpu:sm` has a `lookup.wgsl` of its own.
@@ -128,6 +141,7 @@ struct Resident {
     gpu: Arc<Gpu>,
     scene: SceneBuffers,
     analysis: wgpu::ComputePipeline,
+    tally: wgpu::ComputePipeline,
     apply: wgpu::ComputePipeline,
     clear: wgpu::ComputePipeline,
     render: wgpu::RenderPipeline,
@@ -154,12 +168,10 @@ struct State {
     faces: wgpu::Buffer,
     table: wgpu::Buffer,
     flags: wgpu::Buffer,
-    requests: wgpu::Buffer,
     slot_used: wgpu::Buffer,
-    depth: wgpu::Texture,
     id: wgpu::Texture,
     scratch: wgpu::Texture,
-    /// Bytes of the table, request flags and list.
+    /// Bytes of the table and the requests' counts.
     table_bytes: u64,
 }
 

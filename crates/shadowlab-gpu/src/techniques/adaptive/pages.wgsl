@@ -4,7 +4,8 @@
 // resident). Every level is cut into pages of `page` texels a side; the page table holds,
 // for each page of each level and face, 0 (not resident) or its slot in the physical pool
 // plus one. The pool is one atlas of `atlas_cols` pages a row holding each resident page's
-// linear depths and triangle ids. Table entries are ordered coarsest level first, then
+// triangle ids: the depth of a texel is that of its triangle's plane, found where the
+// shadow ray of the receiver under test meets it. Table entries are ordered coarsest level first, then
 // face, then page row and column, so that entry order is coarse-first. Composed after
 // shaders/common/{ray_offset, light}.wgsl.
 
@@ -138,16 +139,45 @@ fn atlas_texel(h: Hit, uv: vec2<f32>) -> vec2<i32> {
     return vec2<i32>(i32(ox + tx), i32(oy + ty));
 }
 
-// Section 4.2's combined test at the texel holding `uv` in the hit's page: lit when the
-// texel holds the receiver's own triangle, else when the biased depth is not behind it.
-fn lit_at(h: Hit, uv: vec2<f32>, own: u32, biased: f32) -> bool {
+// Vertex `k` of triangle `tri` (nine floats a triangle in `tris`).
+fn corner(tri: u32, k: u32) -> vec3<f32> {
+    let i = tri * 9u + k * 3u;
+    return vec3<f32>(tris[i], tris[i + 1u], tris[i + 2u]);
+}
+
+// How far in front of `p` (in linear depth of view `f`, towards the light) the plane of
+// triangle `tri` meets `p`'s shadow ray: positive when the plane lies between `p` and the
+// light, else 0 (the plane crosses the line behind `p` or behind the light).
+fn plane_ahead(f: u32, tri: u32, p: vec3<f32>, depth: f32) -> f32 {
+    let v0 = corner(tri, 0u);
+    let n = cross(corner(tri, 1u) - v0, corner(tri, 2u) - v0);
+    if vp.light.kind == LIGHT_DIRECTIONAL {
+        // q = p + s · to_light on the plane; linear depth falls by s.
+        let s = dot3(n, v0 - p) / dot3(n, vp.light.pos_or_dir);
+        return select(0.0, s, s > 0.0 && finite(s));
+    }
+    // q = L + t (p − L) on the plane; linear depth is t · depth(p).
+    let l = vp.light.pos_or_dir;
+    let t = dot3(n, v0 - l) / dot3(n, p - l);
+    if !(t > 0.0 && t < 1.0) {
+        return 0.0;
+    }
+    return (1.0 - t) * depth;
+}
+
+// Section 4.2's combined test with the texel holding `uv` in the hit's page: lit when the
+// texel holds the receiver's own triangle, else when the texel's triangle's plane lies no
+// more than `bias` in front of `p` along its shadow ray (the stored depth of the paper,
+// taken at `p` instead of at the texel's centre).
+fn lit_at(h: Hit, uv: vec2<f32>, own: u32, f: u32, p: vec3<f32>, depth: f32, bias: f32) -> bool {
     if h.slot == NO_SLOT {
         return true;
     }
-    let c = atlas_texel(h, uv);
-    let id = textureLoad(pool_id, c, 0).x;
-    let z = textureLoad(pool_depth, c, 0).x;
-    return id == own || biased <= z;
+    let id = textureLoad(pool_id, atlas_texel(h, uv), 0).x;
+    if id == own || id == NO_TRIANGLE {
+        return true;
+    }
+    return plane_ahead(f, id, p, depth) <= bias;
 }
 
 // The library's `receiver_bias` at level `l` of view `f`, in world units.

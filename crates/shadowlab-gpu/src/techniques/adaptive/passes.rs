@@ -2,11 +2,11 @@
 //! stamps, read back), `allocate` (the page table's updates and the new pages emptied),
 //! `render` (the new pages drawn into their slots) and `lookup`.
 
-use super::pool::{Layout, Update};
+use super::pool::{Layout, Request, Update};
 use super::WORKGROUP;
 use super::{Resident, State};
 use crate::compute::bind;
-use crate::transfer::{grid, read_back, storage, uniform, Timer};
+use crate::transfer::{grid, output, read_back, storage, uniform, Timer};
 use crate::upload::LightU;
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::Result;
@@ -118,20 +118,29 @@ fn page_clip(v: &LightView, layout: &Layout, entry: u32) -> [f32; 16] {
     (t * v.clip_from_world.as_dmat4()).as_mat4().to_cols_array()
 }
 
-/// Stage `analysis` over every pixel: returns the requested entries (in the order threads
-/// appended them) and every slot's last-read frame.
+/// A frame's buffers: the virtual map's uniform, the camera pass's samples and their
+/// footprints, the request list and the shadow terms, for `count` pixels.
+pub(super) struct FrameBuffers {
+    pub(super) vu: wgpu::Buffer,
+    pub(super) view: wgpu::Buffer,
+    pub(super) footprints: wgpu::Buffer,
+    pub(super) requests: wgpu::Buffer,
+    pub(super) out: wgpu::Buffer,
+    pub(super) count: u32,
+}
+
+/// Stage `analysis` over every pixel: returns the requested entries with their benefits
+/// (in the order threads appended them) and every slot's last-read frame.
 pub(super) fn analysis(
     res: &Resident,
     st: &State,
-    vu: &wgpu::Buffer,
-    view: &wgpu::Buffer,
-    footprints: &wgpu::Buffer,
-    count: u32,
+    fb: &FrameBuffers,
     timer: &mut Timer,
-) -> Result<(Vec<u32>, Vec<u32>)> {
+) -> Result<(Vec<Request>, Vec<u32>)> {
+    let (vu, view, footprints, requests, count) =
+        (&fb.vu, &fb.view, &fb.footprints, &fb.requests, fb.count);
     let gpu = &res.gpu;
     let (gx, gy, _) = grid(gpu, count, WORKGROUP);
-    let depth = st.depth.create_view(&Default::default());
     let id = st.id.create_view(&Default::default());
     let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: None,
@@ -142,16 +151,16 @@ pub(super) fn analysis(
             entry(2, view.as_entire_binding()),
             entry(3, footprints.as_entire_binding()),
             entry(4, st.table.as_entire_binding()),
-            entry(5, wgpu::BindingResource::TextureView(&depth)),
-            entry(6, wgpu::BindingResource::TextureView(&id)),
+            entry(5, wgpu::BindingResource::TextureView(&id)),
+            entry(6, res.scene.triangles.as_entire_binding()),
             entry(7, st.flags.as_entire_binding()),
-            entry(8, st.requests.as_entire_binding()),
+            entry(8, requests.as_entire_binding()),
             entry(9, st.slot_used.as_entire_binding()),
         ],
     });
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     encoder.clear_buffer(&st.flags, 0, None);
-    encoder.clear_buffer(&st.requests, 0, Some(4));
+    encoder.clear_buffer(requests, 0, Some(4));
     {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("analysis"),
@@ -163,14 +172,43 @@ pub(super) fn analysis(
     }
     gpu.queue.submit([encoder.finish()]);
     let words = |raw: Vec<u8>| -> Vec<u32> { bytemuck::pod_collect_to_vec(&raw) };
-    let n = words(read_back(gpu, &st.requests, 4)?)[0];
-    let listed = words(read_back(gpu, &st.requests, 4 * (u64::from(n) + 1))?);
     let used = words(read_back(
         gpu,
         &st.slot_used,
         4 * u64::from(st.pool.slots()),
     )?);
-    Ok((listed[1..].to_vec(), used))
+    let n = words(read_back(gpu, requests, 4)?)[0];
+    if n == 0 {
+        return Ok((Vec::new(), used));
+    }
+    let benefits = output(gpu, "the requests' benefits", 4 * u64::from(n))?;
+    let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &res.tally.get_bind_group_layout(0),
+        entries: &[
+            entry(0, vu.as_entire_binding()),
+            entry(7, st.flags.as_entire_binding()),
+            entry(8, requests.as_entire_binding()),
+            entry(10, benefits.as_entire_binding()),
+        ],
+    });
+    // The pixels' grid rows, so that `tally` indexes as `main` does.
+    let groups = n.div_ceil(WORKGROUP);
+    let x = groups.min(gx);
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("tally"),
+            timestamp_writes: timer.pass("analysis"),
+        });
+        pass.set_pipeline(&res.tally);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let listed = words(read_back(gpu, requests, 4 * (u64::from(n) + 1))?);
+    let benefit = words(read_back(gpu, &benefits, 4 * u64::from(n))?);
+    Ok((listed[1..].iter().copied().zip(benefit).collect(), used))
 }
 
 fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
@@ -218,7 +256,6 @@ pub(super) fn allocate_and_draw(
             atlas_cols: st.cols,
         },
     );
-    let depth = st.depth.create_view(&Default::default());
     let id = st.id.create_view(&Default::default());
     let clear = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: None,
@@ -226,8 +263,7 @@ pub(super) fn allocate_and_draw(
         entries: &[
             entry(3, cu.as_entire_binding()),
             entry(4, slots.as_entire_binding()),
-            entry(5, wgpu::BindingResource::TextureView(&depth)),
-            entry(6, wgpu::BindingResource::TextureView(&id)),
+            entry(5, wgpu::BindingResource::TextureView(&id)),
         ],
     });
     let s = &res.scene;
@@ -286,7 +322,7 @@ pub(super) fn allocate_and_draw(
         };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("render"),
-            color_attachments: &[target(&depth), target(&id)],
+            color_attachments: &[target(&id)],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &scratch,
                 depth_ops: Some(wgpu::Operations {
@@ -314,19 +350,16 @@ pub(super) fn allocate_and_draw(
     Ok(())
 }
 
-/// Stage `lookup` over every pixel into `out`.
+/// Stage `lookup` over every pixel into the frame's shadow terms.
 pub(super) fn lookup(
     res: &Resident,
     st: &State,
-    vu: &wgpu::Buffer,
-    view: &wgpu::Buffer,
-    out: &wgpu::Buffer,
-    count: u32,
+    fb: &FrameBuffers,
     timer: &mut Timer,
 ) -> Result<()> {
+    let (vu, view, out, count) = (&fb.vu, &fb.view, &fb.out, fb.count);
     let gpu = &res.gpu;
     let (gx, gy, _) = grid(gpu, count, WORKGROUP);
-    let depth = st.depth.create_view(&Default::default());
     let id = st.id.create_view(&Default::default());
     let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: None,
@@ -336,8 +369,8 @@ pub(super) fn lookup(
             entry(1, st.faces.as_entire_binding()),
             entry(2, view.as_entire_binding()),
             entry(3, st.table.as_entire_binding()),
-            entry(4, wgpu::BindingResource::TextureView(&depth)),
-            entry(5, wgpu::BindingResource::TextureView(&id)),
+            entry(4, wgpu::BindingResource::TextureView(&id)),
+            entry(5, res.scene.triangles.as_entire_binding()),
             entry(6, out.as_entire_binding()),
         ],
     });

@@ -2,9 +2,13 @@
 //! physical pool's slots with their LRU stamps: the CPU's side of stage `allocate`.
 //!
 //! The analysis stamps each slot it reads with the frame's clock and records each page it
-//! requests once; the requests come back as a set, and [`Pool::assign`] hands them slots in
-//! the table's entry order (coarsest level first), so the allocation is a function of the
-//! set and the stamps alone, not of the order in which GPU threads ran.
+//! requests once, with the number of receivers requesting it; the requests come back as a
+//! set, and [`Pool::assign`] hands them slots by that benefit, ties in the table's entry
+//! order (coarsest level first), so the allocation is a function of the set, the counts
+//! and the stamps alone, not of the order in which GPU threads ran.
+
+/// A requested page: its table entry and its benefit (the receivers requesting it).
+pub(super) type Request = (u32, u32);
 
 /// A table entry that names no page.
 pub(super) const NO_ENTRY: u32 = u32::MAX;
@@ -147,13 +151,13 @@ impl Pool {
         }
     }
 
-    /// Gives slots to the `requests` (distinct entries), at most `max`: taken in entry
-    /// order, into the free slots first (lowest first), then the slots not read in frame
+    /// Gives slots to the `requests` (distinct entries with their benefits), at most `max`:
+    /// taken by decreasing benefit, ties in entry order, into the free slots first (lowest first), then the slots not read in frame
     /// `now`, least recently read first (ties by slot). A page read this frame is never
     /// evicted; requests beyond the slots available wait for a later pass.
-    pub(super) fn assign(&mut self, requests: &[u32], now: u32, max: usize) -> Vec<Update> {
+    pub(super) fn assign(&mut self, requests: &[(u32, u32)], now: u32, max: usize) -> Vec<Update> {
         let mut requests = requests.to_vec();
-        requests.sort_unstable();
+        requests.sort_unstable_by_key(|&(e, b)| (std::cmp::Reverse(b), e));
         requests.dedup();
         let mut free: Vec<u32> = Vec::new();
         let mut old: Vec<(u32, u32)> = Vec::new();
@@ -169,6 +173,7 @@ impl Pool {
         let candidates = free.into_iter().chain(old.into_iter().map(|(_, s)| s));
         requests
             .into_iter()
+            .map(|(e, _)| e)
             .take(max)
             .zip(candidates)
             .map(|(e, s)| {
@@ -225,8 +230,9 @@ mod tests {
     fn assignment_is_free_first_then_least_recently_used_never_this_frame() {
         let mut p = Pool::new(6, 2);
         assert_eq!(p.pin(0..2, 1).len(), 2);
-        // Frame 1: four free slots, five requests in any order: the lowest four entries.
-        let u = p.assign(&[40, 12, 30, 20, 10], 1, 100);
+        // Frame 1: four free slots, five requests in any order: the four of most benefit,
+        // ties by entry.
+        let u = p.assign(&[(40, 1), (12, 2), (30, 2), (20, 2), (10, 5)], 1, 100);
         let got: Vec<(u32, u32, u32)> = u.iter().map(|u| (u.entry, u.slot, u.evicted)).collect();
         assert_eq!(
             got,
@@ -239,12 +245,12 @@ mod tests {
         );
         // Frame 3: slots 3 and 5 were read in frame 3, slot 2 in frame 2, slot 4 in 1.
         p.stamp(&[3, 3, 2, 3, 1, 3]);
-        let u = p.assign(&[50, 40, 60], 3, 100);
+        let u = p.assign(&[(50, 1), (40, 1), (60, 1)], 3, 100);
         let got: Vec<(u32, u32, u32)> = u.iter().map(|u| (u.entry, u.slot, u.evicted)).collect();
         assert_eq!(got, vec![(40, 4, 20), (50, 2, 10)]);
         assert_eq!(p.resident(), 6);
         // The cap on new pages.
         p.stamp(&[4; 6]);
-        assert_eq!(p.assign(&[70, 80], 5, 1).len(), 1);
+        assert_eq!(p.assign(&[(70, 1), (80, 1)], 5, 1).len(), 1);
     }
 }

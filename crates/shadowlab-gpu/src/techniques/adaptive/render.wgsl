@@ -2,9 +2,9 @@
 // into its slot of the pool atlas (one viewport a page, all in one render pass; the draw's
 // instance selects the page), through the page's own `clip_from_world`: the light view's,
 // scaled and shifted so that the page's square of the view fills the viewport. Each
-// fragment writes its linear depth (distance from the view's eye plane) and its triangle,
-// Section 4.2's id; the depth test keeps the nearest, on the linear depth over the view's
-// far plane. Alpha-masked casters are discarded where cut. Composed after
+// fragment writes its triangle, Section 4.2's id (the look-up takes the depth from the
+// triangle's plane); the depth test keeps the nearest, on the linear depth (distance from
+// the view's eye plane) over the view's far plane. Alpha-masked casters are discarded where cut. Composed after
 // shaders/common/{alpha_mask, triangles}.wgsl.
 
 struct PageU {
@@ -34,8 +34,7 @@ struct Varyings {
 }
 
 struct Texel {
-    @location(0) depth: f32,
-    @location(1) id: u32,
+    @location(0) id: u32,
     @builtin(frag_depth) test: f32,
 }
 
@@ -61,7 +60,6 @@ fn fs(v: Varyings) -> Texel {
         discard;
     }
     var t: Texel;
-    t.depth = v.depth;
     t.id = v.tri;
     t.test = clamp(v.depth / pg.depth_scale, 0.0, 1.0);
     return t;

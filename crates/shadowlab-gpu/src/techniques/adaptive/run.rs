@@ -1,7 +1,7 @@
 //! `gpu:asm`'s frame: the scene and pipelines on the device, the virtual map made or kept,
 //! the passes of analysis, allocation and drawing, the look-up and the counters.
 
-use super::passes::{self, FaceV, VirtualU};
+use super::passes::{self, FaceV, FrameBuffers, VirtualU};
 use super::pool::{Pool, NO_ENTRY};
 use super::*;
 
@@ -17,23 +17,17 @@ impl GpuAdaptive {
                     SceneBuffers::new(&gpu, frame.scene)
                 })
             })??;
-            let targets = [
-                Some(wgpu::ColorTargetState {
-                    format: wgpu::TextureFormat::R32Float,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                }),
-                Some(wgpu::ColorTargetState {
-                    format: wgpu::TextureFormat::R32Uint,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                }),
-            ];
+            let targets = [Some(wgpu::ColorTargetState {
+                format: wgpu::TextureFormat::R32Uint,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })];
             let r = gpu.stage(NAME, "pipeline", || Resident {
                 key,
                 gpu: gpu.clone(),
                 scene,
                 analysis: pipeline(&gpu, &ANALYSIS, "main"),
+                tally: pipeline(&gpu, &ANALYSIS, "tally"),
                 apply: pipeline(&gpu, &ALLOCATE, "apply"),
                 clear: pipeline(&gpu, &ALLOCATE, "clear"),
                 render: render_pipeline(&gpu, "asm render", |d| {
@@ -123,9 +117,7 @@ fn new_state(gpu: &Gpu, p: &Params, shape: Shape) -> Result<State> {
         faces: storage(gpu, "the light views", bytemuck::cast_slice(&faces))?,
         table: zeroed(gpu, "the page table", 4 * entries, false)?,
         flags: zeroed(gpu, "the page requests' flags", 4 * entries, false)?,
-        requests: zeroed(gpu, "the page requests", 4 * (entries + 1), true)?,
         slot_used: zeroed(gpu, "the slots' stamps", 4 * u64::from(shape.slots), true)?,
-        depth: pool_texture(gpu, "pool depths", w, h, wgpu::TextureFormat::R32Float),
         id: pool_texture(gpu, "pool ids", w, h, wgpu::TextureFormat::R32Uint),
         scratch: pool_texture(
             gpu,
@@ -134,7 +126,7 @@ fn new_state(gpu: &Gpu, p: &Params, shape: Shape) -> Result<State> {
             h,
             wgpu::TextureFormat::Depth32Float,
         ),
-        table_bytes: 4 * (3 * entries + 1),
+        table_bytes: 4 * 2 * entries,
         shape,
     })
 }
@@ -218,6 +210,8 @@ impl ShadowTechnique for GpuAdaptive {
             bytemuck::cast_slice(&footprints(frame)),
         )?;
         let out = output(&gpu, "the shadow terms", u64::from(n) * 12)?;
+        // A pixel requests one page a pass at most.
+        let requests = zeroed(&gpu, "the page requests", 4 * (u64::from(n) + 1), true)?;
         let (_, _, row) = crate::transfer::grid(&gpu, n, WORKGROUP);
         let vu = crate::transfer::uniform(
             &gpu,
@@ -238,6 +232,14 @@ impl ShadowTechnique for GpuAdaptive {
                 pad: 0,
             },
         );
+        let fb = FrameBuffers {
+            vu,
+            view,
+            footprints: fp,
+            requests,
+            out,
+            count: n,
+        };
         let mut timer = Timer::new(&gpu, 3 * (p.passes + 1) + 2);
         let mut tally = Tally::default();
         if st.pool.resident() == 0 {
@@ -255,7 +257,7 @@ impl ShadowTechnique for GpuAdaptive {
             tally.passes += 1;
             let (requests, used) = stats.stage("analysis", || {
                 gpu.stage(NAME, "analysis", || {
-                    passes::analysis(res, st, &vu, &view, &fp, n, &mut timer)
+                    passes::analysis(res, st, &fb, &mut timer)
                 })
             })??;
             st.pool.stamp(&used);
@@ -274,13 +276,11 @@ impl ShadowTechnique for GpuAdaptive {
             })??;
         }
         stats.stage("lookup", || {
-            gpu.stage(NAME, "lookup", || {
-                passes::lookup(res, st, &vu, &view, &out, n, &mut timer)
-            })
+            gpu.stage(NAME, "lookup", || passes::lookup(res, st, &fb, &mut timer))
         })??;
         let raw = stats.stage("readback", || {
             gpu.stage(NAME, "readback", || {
-                read_back(&gpu, &out, u64::from(n) * 12)
+                read_back(&gpu, &fb.out, u64::from(n) * 12)
             })
         })??;
         for (stage, ms) in timer.read(&gpu)? {
@@ -296,7 +296,7 @@ impl ShadowTechnique for GpuAdaptive {
         stats.count("pool_pages", slots as f64);
         stats.count("analysis_passes", f64::from(tally.passes));
         stats.count("page_table_bytes", st.table_bytes as f64);
-        stats.count("scratch_bytes", (slots * page_bytes / 2) as f64);
+        stats.count("scratch_bytes", (slots * page_bytes) as f64);
         stats.count("virtual_resolution", f64::from(layout.side));
         stats.count("levels", f64::from(layout.levels));
         stats.count("hardware_raster", 1.0);
