@@ -229,6 +229,19 @@ impl Params {
                 self.root, self.tile
             )));
         }
+        // Every level's pages, a quarter of the finer's: at most 4/3 of the finest's.
+        let finest = u64::from(root / self.tile) << REFINED_LEVELS;
+        let entries = u64::from(faces) * finest * finest * 4 / 3;
+        if entries > u64::from(u32::MAX / 4) {
+            return Err(Error::Limit(format!(
+                "{NAME}.root-resolution = {} over pages of {NAME}.tile-resolution = {} texels \
+                 needs a page table of {entries} entries, past the {} a table may hold; lower \
+                 {NAME}.root-resolution or raise {NAME}.tile-resolution",
+                self.root,
+                self.tile,
+                u32::MAX / 4
+            )));
+        }
         Ok(Layout {
             page: self.tile,
             levels: REFINED_LEVELS + 1,
