@@ -27,7 +27,9 @@
 //!    ones, and the new pages are emptied.
 //! 3. **render** (`render.wgsl`): the hardware rasterizer draws each new page into its slot
 //!    (one render pass, a viewport a page) through the page's own `clip_from_world`,
-//!    keeping the nearest triangle's id.
+//!    keeping the nearest triangle's id; a page draws only the triangles of its cell, a
+//!    page of the coarsest level, whose list (the paper's culling, Section 4.3) is made
+//!    once per map ([`culling`]).
 //!
 //! Then **lookup** (`lookup.wgsl`): every receiver reads the finest resident page over it
 //! and applies Section 4.2's test: lit when the texel holds its own triangle, else when the
@@ -75,6 +77,7 @@
 //! the requests are a set with order-independent counts, and slots are given by benefit,
 //! ties in table order.
 
+mod culling;
 mod passes;
 mod pool;
 mod run;
@@ -171,6 +174,9 @@ struct State {
     slot_used: wgpu::Buffer,
     id: wgpu::Texture,
     scratch: wgpu::Texture,
+    /// Section 4.3's culling lists: the offsets on the CPU, the triangles uploaded.
+    culling: culling::Culling,
+    cull: wgpu::Buffer,
     /// Bytes of the table and the requests' counts.
     table_bytes: u64,
 }

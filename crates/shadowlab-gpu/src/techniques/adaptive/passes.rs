@@ -12,7 +12,6 @@ use bytemuck::{Pod, Zeroable};
 use shadowlab::error::Result;
 use shadowlab::light::LightView;
 use shadowlab::math::DMat4;
-use shadowlab::techniques::Frame;
 
 /// `VirtualU` of `pages.wgsl`.
 #[repr(C)]
@@ -66,7 +65,8 @@ struct PageU {
     light_from_world: [f32; 16],
     depth_scale: f32,
     masks: u32,
-    pad: [u32; 2],
+    first: u32,
+    pad: u32,
 }
 
 /// `AllocU` of `allocate.wgsl`.
@@ -220,7 +220,6 @@ fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEn
 pub(super) fn allocate_and_draw(
     res: &Resident,
     st: &State,
-    frame: &Frame,
     updates: &[Update],
     timer: &mut Timer,
 ) -> Result<()> {
@@ -267,16 +266,22 @@ pub(super) fn allocate_and_draw(
         ],
     });
     let s = &res.scene;
+    let lists: Vec<(u32, u32)> = updates
+        .iter()
+        .map(|u| st.culling.of(&st.layout, st.layout.page(u.entry)))
+        .collect();
     let pages: Vec<PageU> = updates
         .iter()
-        .map(|u| {
+        .zip(&lists)
+        .map(|(u, &(first, _))| {
             let v = &st.views[st.layout.page(u.entry).face as usize];
             PageU {
                 clip_from_world: page_clip(v, &st.layout, u.entry),
                 light_from_world: v.light_from_world.to_cols_array(),
                 depth_scale: depth_scale(v),
                 masks: u32::from(s.masks),
-                pad: [0; 2],
+                first,
+                pad: 0,
             }
         })
         .collect();
@@ -291,6 +296,7 @@ pub(super) fn allocate_and_draw(
             &s.materials,
             &s.uvs,
             &s.texels,
+            &st.cull,
         ]),
     });
     let scratch = st.scratch.create_view(&Default::default());
@@ -337,13 +343,15 @@ pub(super) fn allocate_and_draw(
         });
         pass.set_pipeline(&res.render);
         pass.set_bind_group(0, &draw, &[]);
-        let vertices = frame.scene.len() as u32 * 3;
-        for (i, u) in updates.iter().enumerate() {
+        for (i, (u, &(_, count))) in updates.iter().zip(&lists).enumerate() {
+            if count == 0 {
+                continue;
+            }
             let x = (u.slot % st.cols) * page;
             let y = (u.slot / st.cols) * page;
             pass.set_viewport(x as f32, y as f32, page as f32, page as f32, 0.0, 1.0);
             pass.set_scissor_rect(x, y, page, page);
-            pass.draw(0..vertices, i as u32..i as u32 + 1);
+            pass.draw(0..count * 3, i as u32..i as u32 + 1);
         }
     }
     gpu.queue.submit([encoder.finish()]);

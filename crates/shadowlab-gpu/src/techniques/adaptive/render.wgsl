@@ -1,7 +1,8 @@
 // gpu:asm, stage `render`: the hardware rasterizer draws each new page of the virtual map
 // into its slot of the pool atlas (one viewport a page, all in one render pass; the draw's
 // instance selects the page), through the page's own `clip_from_world`: the light view's,
-// scaled and shifted so that the page's square of the view fills the viewport. Each
+// scaled and shifted so that the page's square of the view fills the viewport, drawing only
+// the triangles of its cell's culling list. Each
 // fragment writes its triangle, Section 4.2's id (the look-up takes the depth from the
 // triangle's plane); the depth test keeps the nearest, on the linear depth (distance from
 // the view's eye plane) over the view's far plane. Alpha-masked casters are discarded where cut. Composed after
@@ -14,8 +15,9 @@ struct PageU {
     depth_scale: f32,
     // 1 when some material is alpha-masked.
     masks: u32,
+    // The page's first triangle in `cull` (its cell's list).
+    first: u32,
     _pad0: u32,
-    _pad1: u32,
 }
 
 @group(0) @binding(0) var<storage, read> pages: array<PageU>;
@@ -24,6 +26,8 @@ struct PageU {
 @group(0) @binding(3) var<storage, read> materials: array<MaterialU>;
 @group(0) @binding(4) var<storage, read> uvs: array<f32>;
 @group(0) @binding(5) var<storage, read> texels: array<u32>;
+// Every cell's triangles (Section 4.3's culling lists); draw `i` of a page reads its own.
+@group(0) @binding(6) var<storage, read> cull: array<u32>;
 
 struct Varyings {
     @builtin(position) clip: vec4<f32>,
@@ -40,10 +44,10 @@ struct Texel {
 
 @vertex
 fn vs(@builtin(vertex_index) vi: u32, @builtin(instance_index) page: u32) -> Varyings {
-    let tri = vi / 3u;
+    let pg = pages[page];
+    let tri = cull[pg.first + vi / 3u];
     let k = vi % 3u;
     let p = vec4<f32>(vertex(tri, k), 1.0);
-    let pg = pages[page];
     var out: Varyings;
     out.clip = pg.clip_from_world * p;
     out.depth = -(pg.light_from_world * p).z;

@@ -1,9 +1,11 @@
 //! `gpu:asm`'s frame: the scene and pipelines on the device, the virtual map made or kept,
 //! the passes of analysis, allocation and drawing, the look-up and the counters.
 
+use super::culling::Culling;
 use super::passes::{self, FaceV, FrameBuffers, VirtualU};
 use super::pool::{Pool, NO_ENTRY};
 use super::*;
+use shadowlab::scene::Scene;
 
 impl GpuAdaptive {
     fn resident(&mut self, frame: &Frame, stats: &mut Stats) -> Result<&mut Resident> {
@@ -82,7 +84,7 @@ fn pool_texture(gpu: &Gpu, what: &str, w: u32, h: u32, f: wgpu::TextureFormat) -
 
 /// A new, empty virtual map of `shape` on `gpu`: the budget checked against the coarsest
 /// level and the adapter's largest texture.
-fn new_state(gpu: &Gpu, p: &Params, shape: Shape) -> Result<State> {
+fn new_state(gpu: &Gpu, scene: &Scene, p: &Params, shape: Shape) -> Result<State> {
     let layout = shape.layout;
     let pinned = layout.coarsest().len() as u32;
     if shape.slots < pinned {
@@ -109,7 +111,15 @@ fn new_state(gpu: &Gpu, p: &Params, shape: Shape) -> Result<State> {
     let (w, h) = (cols * layout.page, rows * layout.page);
     let entries = u64::from(layout.entries());
     let faces: Vec<FaceV> = shape.views.iter().map(FaceV::of).collect();
+    let culling = Culling::new(scene, &shape.views, &layout);
+    let cull = storage(
+        gpu,
+        "the culling lists",
+        bytemuck::cast_slice(&culling.triangles),
+    )?;
     Ok(State {
+        culling,
+        cull,
         layout,
         views: shape.views.clone(),
         pool: Pool::new(shape.slots, pinned),
@@ -199,7 +209,8 @@ impl ShadowTechnique for GpuAdaptive {
         let gpu = res.gpu.clone();
         if self.state.as_ref().is_none_or(|s| s.shape != shape) {
             self.state = None;
-            self.state = Some(stats.stage("allocate_pool", || new_state(&gpu, &p, shape))?);
+            self.state =
+                Some(stats.stage("allocate_pool", || new_state(&gpu, frame.scene, &p, shape))?);
         }
         let st = self.state.as_mut().expect("made above");
         let n = frame.view.triangle.len() as u32;
@@ -248,7 +259,7 @@ impl ShadowTechnique for GpuAdaptive {
             tally.drawn += pins.len();
             stats.stage("render", || {
                 gpu.stage(NAME, "render", || {
-                    passes::allocate_and_draw(res, st, frame, &pins, &mut timer)
+                    passes::allocate_and_draw(res, st, &pins, &mut timer)
                 })
             })??;
         }
@@ -271,7 +282,7 @@ impl ShadowTechnique for GpuAdaptive {
             tally.evicted += updates.iter().filter(|u| u.evicted != NO_ENTRY).count();
             stats.stage("render", || {
                 gpu.stage(NAME, "render", || {
-                    passes::allocate_and_draw(res, st, frame, &updates, &mut timer)
+                    passes::allocate_and_draw(res, st, &updates, &mut timer)
                 })
             })??;
         }
@@ -296,6 +307,7 @@ impl ShadowTechnique for GpuAdaptive {
         stats.count("pool_pages", slots as f64);
         stats.count("analysis_passes", f64::from(tally.passes));
         stats.count("page_table_bytes", st.table_bytes as f64);
+        stats.count("culling_bytes", st.culling.bytes() as f64);
         stats.count("scratch_bytes", (slots * page_bytes) as f64);
         stats.count("virtual_resolution", f64::from(layout.side));
         stats.count("levels", f64::from(layout.levels));
