@@ -117,3 +117,48 @@ fn clipped_uv_bounds(c: [Vec4; 3]) -> Option<[f32; 4]> {
     }
     (k >= 3).then_some(r)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use shadowlab::light::light_views;
+    use shadowlab::math::ndc_to_uv;
+    use shadowlab::techniques::shadow_map::DIRECTIONAL_PAD;
+
+    /// Every vertex of every triangle in front of the light lies in a cell that lists the
+    /// triangle, and a cell lists only triangles whose projection reaches near it.
+    #[test]
+    fn each_cell_lists_the_triangles_over_it() {
+        let scene = shadowlab::scene::load("bunny", &Default::default()).unwrap();
+        let light = scene.light.unwrap();
+        let views = light_views(&light, &scene.bounds, &scene.bounds, DIRECTIONAL_PAD);
+        let layout = Layout {
+            page: 32,
+            levels: 3,
+            side: 512 << 2,
+            faces: views.len() as u32,
+        };
+        let c = Culling::new(&scene, &views, &layout);
+        let n = layout.pages_across(2);
+        let listed = |cell: u32, t: u32| {
+            let (a, b) = (c.first[cell as usize], c.first[cell as usize + 1]);
+            c.triangles[a as usize..b as usize].contains(&t)
+        };
+        for t in 0..scene.len() {
+            for p in scene.triangle(t) {
+                let q = views[0].clip_from_world * p.extend(1.0);
+                let (u, v) = ndc_to_uv(q);
+                if !(q.w > 0.0 && (0.0..1.0).contains(&u) && (0.0..1.0).contains(&v)) {
+                    continue;
+                }
+                let cell = (v * n as f32) as u32 * n + (u * n as f32) as u32;
+                assert!(
+                    listed(cell, t as u32),
+                    "triangle {t} missing from cell {cell}"
+                );
+            }
+        }
+        // Culling culls: the lists together hold far fewer than every triangle per cell.
+        assert!(c.triangles.len() < scene.len() * (n * n) as usize / 8);
+    }
+}
