@@ -101,6 +101,8 @@ pub const NAME: &str = "gpu:asm";
 
 /// Mip levels finer than the root: the finest level is the root side times 2^this.
 pub const REFINED_LEVELS: u32 = 7;
+// `pages.wgsl` keeps each level's first table entry in eight words.
+const _: () = assert!(REFINED_LEVELS < 8);
 
 const WORKGROUP: u32 = 64;
 

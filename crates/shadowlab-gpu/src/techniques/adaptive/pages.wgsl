@@ -40,6 +40,8 @@ struct VirtualU {
     bias: f32,
     slope_bias: f32,
     _pad0: u32,
+    // The first table entry of each level (`level_base`), four to a vector.
+    bases: array<vec4<u32>, 2>,
 }
 
 struct Hit {
@@ -101,14 +103,9 @@ fn texel_index(u: f32, n: u32) -> u32 {
     return u32(clamp(floor(u * f32(n)), 0.0, f32(n - 1u)));
 }
 
-// The first table entry of level `l`.
+// The first table entry of level `l`: the coarser levels' entries come before it.
 fn level_base(l: u32) -> u32 {
-    var b = 0u;
-    for (var k = vp.levels - 1u; k > l; k--) {
-        let n = pages_across(k);
-        b += vp.faces * n * n;
-    }
-    return b;
+    return vp.bases[l / 4u][l % 4u];
 }
 
 // The table entry of the page holding texel (tx, ty) of level `l` of face `f`.

@@ -30,6 +30,7 @@ pub(super) struct VirtualU {
     pub(super) bias: f32,
     pub(super) slope_bias: f32,
     pub(super) pad: u32,
+    pub(super) bases: [u32; 8],
 }
 
 /// `FaceV` of `pages.wgsl`.
@@ -403,7 +404,7 @@ mod tests {
 
     #[test]
     fn mirrored_structs_have_the_wgsl_sizes() {
-        assert_eq!(std::mem::size_of::<VirtualU>(), 96);
+        assert_eq!(std::mem::size_of::<VirtualU>(), 128);
         assert_eq!(std::mem::size_of::<FaceV>(), 144);
         assert_eq!(std::mem::size_of::<PageU>(), 144);
         assert_eq!(std::mem::size_of::<AllocU>(), 16);

@@ -241,6 +241,7 @@ impl ShadowTechnique for GpuAdaptive {
                 bias: p.bias,
                 slope_bias: p.slope_bias,
                 pad: 0,
+                bases: std::array::from_fn(|l| layout.level_base(l as u32)),
             },
         );
         let fb = FrameBuffers {
