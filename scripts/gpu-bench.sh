@@ -16,6 +16,9 @@
 #   (goals: gpu:afsm at most gpu:raytrace; 32 samples at most 2.5x one; 32 samples under
 #   16 ms). GPU times are the counters gpu_*_ms; the 32-sample run's sub-pixel primary
 #   hits are traced on the CPU (stage subpixel_hits), outside the GPU time;
+# - asm-room/: `compare` of room's walkthrough over 8 frames with gpu:asm, a 2048²
+#   gpu:sm and the CPU asm (goal: gpu:asm's last frame's mismatch at most 1/10 of
+#   gpu:sm's within a 16 MiB pool; results[].frames[] in asm-room/metrics.json);
 # - gpu-bench.log: everything printed.
 #
 #   scripts/gpu-bench.sh BINARY OUTDIR
@@ -93,6 +96,8 @@ hair=(render --force --scene hairball --width 1920 --height 1080)
 run "${hair[@]}" --technique gpu:afsm --stats "$out/hairball-afsm-1.json"
 run "${hair[@]}" --technique gpu:afsm --param samples=32 --stats "$out/hairball-afsm-32.json"
 run "${hair[@]}" --technique gpu:raytrace --stats "$out/hairball-raytrace.json"
+run compare --force --scene room --techniques gpu:asm,gpu:sm,asm \
+    --param gpu:sm.resolution=2048 --frames 8 --out "$out/asm-room"
 set -e
 say "bench gpu's exit status $status"
 exit "$status"

@@ -205,3 +205,55 @@ pub fn soft_verdict(
     );
     (eg, ec)
 }
+
+/// [`verdict`] with a one-sided bound, for a GPU technique built differently from its CPU
+/// twin so that it may well be more accurate: two GPU runs give the same bits, the image
+/// shows shadow, and the GPU's mean error against a reference of `spp` samples a pixel is
+/// at most the CPU's plus [`ERROR_FACTOR`] of it (or [`ERROR_ABS`]); lower is allowed.
+pub fn verdict_no_worse(
+    scene: &str,
+    set: &Set,
+    gpu: &str,
+    cpu: &str,
+    params: &[&str],
+    spp: u32,
+) -> Verdict {
+    use shadowlab::techniques::{self, Frame};
+    shadowlab_gpu::register();
+    let (s, c, l, view) = (&set.0, &set.1, &set.2, &set.3);
+    let frame = Frame::new(s, c, l, view);
+    let make = |name: &str| {
+        let mut t = techniques::create(name).unwrap();
+        for p in params {
+            let (k, v) = p.split_once('=').unwrap();
+            t.set_param(k, v).unwrap();
+        }
+        t
+    };
+    let a = make(gpu).render(&frame).unwrap();
+    let b = make(gpu).render(&frame).unwrap();
+    assert!(
+        a.visibility.value == b.visibility.value,
+        "{scene}: two runs of {gpu} differ"
+    );
+    let cpu_shadows = make(cpu).render(&frame).unwrap();
+    let pattern =
+        shadowlab::sampling::pattern(shadowlab::sampling::PatternKind::Grid, spp).unwrap();
+    let reference = shadowlab::reference::Reference::build(s).visibility(&frame, &pattern);
+    let eg = shadowlab::compare::compare(view, &a.visibility, &reference).mean_abs_error;
+    let ec = shadowlab::compare::compare(view, &cpu_shadows.visibility, &reference).mean_abs_error;
+    assert!(
+        eg <= ec + (ERROR_FACTOR * ec).max(ERROR_ABS),
+        "{scene}: {gpu}'s error {eg} against the reference is above {cpu}'s {ec} by more than 10% (or {ERROR_ABS})"
+    );
+    let shadowed = a.visibility.value.iter().filter(|v| v.x < 0.5).count();
+    assert!(
+        shadowed > 50,
+        "{scene}: {gpu} has only {shadowed} shadowed pixels: the test shows nothing"
+    );
+    Verdict {
+        gpu: a.visibility.value,
+        cpu: cpu_shadows.visibility.value,
+        errors: (eg, ec),
+    }
+}

@@ -1,6 +1,7 @@
 //! The `gpu:` techniques: one folder per technique, mirroring the library's technique
 //! folders, and the registry that creates them by name.
 
+pub mod adaptive;
 pub mod alias_free;
 pub mod cascaded;
 pub mod convolution;
@@ -38,6 +39,7 @@ pub const ALL: &[&str] = &[
     moments::EVSM_SOFT,
     moments::MSM_SOFT,
     convolution::CSM_SOFT,
+    adaptive::NAME,
 ];
 
 /// A GPU technique by name (`gpu:raytrace`, …), with the defaults of its CPU twin.
@@ -74,6 +76,7 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
             Box::new(Convolution::default()),
             true,
         ),
+        adaptive::NAME => Box::new(adaptive::GpuAdaptive::default()),
         _ => {
             return Err(Error::param(format!(
                 "unknown GPU technique {name:?}: the GPU techniques are {}",
