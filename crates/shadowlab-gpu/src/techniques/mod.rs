@@ -2,6 +2,7 @@
 //! folders, and the registry that creates them by name.
 
 pub mod alias_free;
+pub mod pcss;
 pub mod raytrace;
 pub mod shadow_map;
 
@@ -14,6 +15,7 @@ pub const ALL: &[&str] = &[
     shadow_map::PCF,
     raytrace::NAME,
     alias_free::NAME,
+    pcss::NAME,
 ];
 
 /// A GPU technique by name (`gpu:raytrace`, …), with the defaults of its CPU twin.
@@ -23,6 +25,7 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
         shadow_map::PCF => Box::new(shadow_map::GpuShadowMap::pcf()),
         raytrace::NAME => Box::new(raytrace::GpuRayTrace::default()),
         alias_free::NAME => Box::new(alias_free::GpuAliasFree::default()),
+        pcss::NAME => Box::new(pcss::GpuPcss::default()),
         _ => {
             return Err(Error::param(format!(
                 "unknown GPU technique {name:?}: the GPU techniques are {}",

@@ -63,10 +63,10 @@ struct FaceU {
     pad: [u32; 2],
 }
 
-/// `ViewU` of `lookup.wgsl`.
+/// `ViewU` of `lookup.wgsl` (and of `gpu:pcss`'s stages, which read the same maps).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct ViewU {
+pub(crate) struct ViewU {
     clip_from_world: [f32; 16],
     light_from_world: [f32; 16],
     ortho: u32,
@@ -90,7 +90,7 @@ struct LookupParams {
 }
 
 /// The depth a view's linear depths are divided by before they are stored: its far plane.
-fn depth_scale(v: &LightView) -> f32 {
+pub(crate) fn depth_scale(v: &LightView) -> f32 {
     if v.far.is_finite() && v.far > 0.0 {
         v.far
     } else {
@@ -175,7 +175,7 @@ impl GpuShadowMap {
 
 /// The depth stage's render pipeline: no colour target, a 32-bit float depth written by
 /// the fragment, the nearest kept (`Less`), both faces drawn.
-fn depth_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
+pub(crate) fn depth_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
     DEPTH.depth_tested_pipeline(device, &[])
 }
 
@@ -223,7 +223,9 @@ impl ShadowTechnique for GpuShadowMap {
         let mut timer = Timer::new(&gpu, 8);
         let map = stats.stage("shadow_map", || {
             gpu.stage(name, "shadow_map", || {
-                draw_maps(res, frame, &views, res_side, &mut timer)
+                draw_maps(
+                    &gpu, &res.scene, &res.depth, frame, &views, res_side, &mut timer,
+                )
             })
         })??;
         stats.stage("lookup", || {
@@ -250,15 +252,17 @@ impl ShadowTechnique for GpuShadowMap {
     }
 }
 
-/// Draws every light view's depth map into one layer of a new array texture.
-fn draw_maps(
-    res: &Resident,
+/// Draws every light view's depth map into one layer of a new array texture, with the
+/// `depth` pipeline ([`depth_pipeline`]) over the scene's buffers `s`.
+pub(crate) fn draw_maps(
+    gpu: &Gpu,
+    s: &SceneBuffers,
+    depth: &wgpu::RenderPipeline,
     frame: &Frame,
     views: &[LightView],
     side: u32,
     timer: &mut Timer,
 ) -> Result<wgpu::Texture> {
-    let gpu = &res.gpu;
     let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("shadow map"),
         size: wgpu::Extent3d {
@@ -273,7 +277,6 @@ fn draw_maps(
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
         view_formats: &[],
     });
-    let s = &res.scene;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     for (i, v) in views.iter().enumerate() {
         let face = FaceU {
@@ -286,7 +289,7 @@ fn draw_maps(
         let face = uniform(gpu, "light view", &face);
         let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
-            layout: &res.depth.get_bind_group_layout(0),
+            layout: &depth.get_bind_group_layout(0),
             entries: &bind_entries(&[
                 &face,
                 &s.triangles,
@@ -318,7 +321,7 @@ fn draw_maps(
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&res.depth);
+            pass.set_pipeline(depth);
             pass.set_bind_group(0, &group, &[]);
             pass.draw(0..frame.scene.len() as u32 * 3, 0..1);
         }
@@ -359,18 +362,7 @@ fn lookup(
         pad: [0; 2],
     };
     let params = uniform(gpu, "look-up parameters", &params);
-    let table: Vec<ViewU> = views
-        .iter()
-        .map(|v| ViewU {
-            clip_from_world: v.clip_from_world.to_cols_array(),
-            light_from_world: v.light_from_world.to_cols_array(),
-            ortho: u32::from(v.orthographic),
-            near: v.near,
-            extent: v.extent,
-            depth_scale: depth_scale(v),
-        })
-        .collect();
-    let table = storage(gpu, "the light views", bytemuck::cast_slice(&table))?;
+    let table = view_table(gpu, views)?;
     let map_view = map.create_view(&wgpu::TextureViewDescriptor {
         dimension: Some(wgpu::TextureViewDimension::D2Array),
         ..Default::default()
@@ -417,6 +409,22 @@ fn lookup(
     }
     gpu.queue.submit([encoder.finish()]);
     Ok(())
+}
+
+/// The light views as `ViewU`s in a storage buffer.
+pub(crate) fn view_table(gpu: &Gpu, views: &[LightView]) -> Result<wgpu::Buffer> {
+    let table: Vec<ViewU> = views
+        .iter()
+        .map(|v| ViewU {
+            clip_from_world: v.clip_from_world.to_cols_array(),
+            light_from_world: v.light_from_world.to_cols_array(),
+            ortho: u32::from(v.orthographic),
+            near: v.near,
+            extent: v.extent,
+            depth_scale: depth_scale(v),
+        })
+        .collect();
+    storage(gpu, "the light views", bytemuck::cast_slice(&table))
 }
 
 #[cfg(test)]
