@@ -5,6 +5,7 @@ pub mod alias_free;
 pub mod pcss;
 pub mod raytrace;
 pub mod shadow_map;
+pub mod subpixel;
 
 use shadowlab::error::{Error, Result};
 use shadowlab::techniques::ShadowTechnique;
@@ -16,6 +17,7 @@ pub const ALL: &[&str] = &[
     raytrace::NAME,
     alias_free::NAME,
     pcss::NAME,
+    subpixel::NAME,
 ];
 
 /// A GPU technique by name (`gpu:raytrace`, …), with the defaults of its CPU twin.
@@ -26,6 +28,7 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
         raytrace::NAME => Box::new(raytrace::GpuRayTrace::default()),
         alias_free::NAME => Box::new(alias_free::GpuAliasFree::default()),
         pcss::NAME => Box::new(pcss::GpuPcss::default()),
+        subpixel::NAME => Box::new(subpixel::GpuSubpixel::default()),
         _ => {
             return Err(Error::param(format!(
                 "unknown GPU technique {name:?}: the GPU techniques are {}",
