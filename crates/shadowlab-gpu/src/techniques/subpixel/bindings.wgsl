@@ -80,7 +80,11 @@ struct FacetU {
 @group(0) @binding(6) var<storage, read_write> materials: array<MaterialU>;
 @group(0) @binding(7) var<storage, read_write> uvs: array<f32>;
 @group(0) @binding(8) var<storage, read_write> texels: array<u32>;
-@group(0) @binding(9) var<storage, read_write> edges: array<vec4<f32>>;
+// Per edge, its ends (six floats); and 1 when it has two faces, then their opposite
+// vertices (seven floats). Two bindings, so a large scene's edges fit the adapter's
+// largest binding twice as far.
+@group(0) @binding(9) var<storage, read_write> edge_ends: array<f32>;
+@group(0) @binding(24) var<storage, read_write> edge_faces: array<f32>;
 @group(0) @binding(10) var<storage, read_write> lut: array<vec4<u32>>;
 @group(0) @binding(11) var<storage, read_write> lut_samples: array<vec2<f32>>;
 // Per texel of every view: the nearest silhouette edge's depth bits, inverted (0: none).

@@ -74,7 +74,7 @@ const STAGES: &[(Stage, &[&str])] = &[
 ];
 
 /// Bindings of `bindings.wgsl`: 0 the frame's uniform, 3 the depth map, the rest storage.
-pub const BINDINGS: u32 = 24;
+pub const BINDINGS: u32 = 25;
 const UNIFORM_BINDING: u32 = 0;
 const MAP_BINDING: u32 = 3;
 

@@ -64,9 +64,8 @@ struct Resident {
     gpu: Arc<Gpu>,
     scene: SceneBuffers,
     depth: wgpu::RenderPipeline,
-    /// Four `vec4`s an edge: its ends (the first's w 1 when it has two faces) and the
-    /// opposite vertices of its faces.
-    edges: wgpu::Buffer,
+    /// The edges' ends, and whether each has two faces with their opposite vertices.
+    edges: [wgpu::Buffer; 2],
     edge_count: u32,
 }
 

@@ -20,21 +20,30 @@ use shadowlab::techniques::{Frame, Stats};
 
 const WORKGROUP: u32 = 64;
 
-/// The scene's edges as `silhouette_edges.wgsl` reads them, and their number.
-pub fn upload_edges(gpu: &Gpu, scene: &Scene) -> Result<(wgpu::Buffer, u32)> {
+/// The scene's edges as `silhouette_edges.wgsl` reads them (ends; faces), and their
+/// number.
+pub fn upload_edges(gpu: &Gpu, scene: &Scene) -> Result<([wgpu::Buffer; 2], u32)> {
     let adj = edge_adjacency(scene);
-    let mut data: Vec<f32> = Vec::with_capacity(adj.a.len() * 16);
+    let mut ends: Vec<f32> = Vec::with_capacity(adj.a.len() * 6);
+    let mut faces: Vec<f32> = Vec::with_capacity(adj.a.len() * 7);
     for e in 0..adj.a.len() {
+        ends.extend_from_slice(&adj.a[e].to_array());
+        ends.extend_from_slice(&adj.b[e].to_array());
         let (two, f) = match adj.faces[e] {
             Some(f) => (1.0, f),
             None => (0.0, [Vec3::ZERO; 2]),
         };
-        for (p, w) in [(adj.a[e], two), (adj.b[e], 0.0), (f[0], 0.0), (f[1], 0.0)] {
-            data.extend_from_slice(&[p.x, p.y, p.z, w]);
-        }
+        faces.push(two);
+        faces.extend_from_slice(&f[0].to_array());
+        faces.extend_from_slice(&f[1].to_array());
     }
-    let b = storage(gpu, "the scene's edges", bytemuck::cast_slice(&data))?;
-    Ok((b, adj.a.len() as u32))
+    Ok((
+        [
+            storage(gpu, "the scene's edges", bytemuck::cast_slice(&ends))?,
+            storage(gpu, "the scene's edge faces", bytemuck::cast_slice(&faces))?,
+        ],
+        adj.a.len() as u32,
+    ))
 }
 
 /// The camera's rays as `RayPlane` forms them: (o0, ox, oy, d0, dx, dy, parallel).
@@ -174,7 +183,7 @@ fn counters(gpu: &Gpu, b: &wgpu::Buffer) -> Result<[u32; 4]> {
 
 /// The frame's buffers, by binding: the uniform, views and samples (0–2); the look-up
 /// table, the pattern and the per-texel, per-pixel and counter buffers (10–21); the
-/// camera depths (23).
+/// camera depths (23); the edges (9, 24) are the scene's.
 struct Buffers {
     fixed: [wgpu::Buffer; 3],
     rest: [wgpu::Buffer; 12],
@@ -249,11 +258,12 @@ fn bind_group(
         s.materials.as_entire_binding(),
         s.uvs.as_entire_binding(),
         s.texels.as_entire_binding(),
-        r.edges.as_entire_binding(),
+        r.edges[0].as_entire_binding(),
     ];
     list.extend(b.rest.iter().map(|b| b.as_entire_binding()));
     list.push(pairs.as_entire_binding());
     list.push(b.cam_depth.as_entire_binding());
+    list.push(r.edges[1].as_entire_binding());
     debug_assert_eq!(list.len(), BINDINGS as usize);
     let entries: Vec<wgpu::BindGroupEntry> = list
         .into_iter()

@@ -7,15 +7,24 @@
 // the nearest edge depth (an integer max of inverted depth bits: order-independent).
 // Composed after subpixel/{bindings, rasterization}.wgsl.
 
+fn edge_point(buf_ends: bool, e: u32, k: u32) -> vec3<f32> {
+    if buf_ends {
+        let i = 6u * e + 3u * k;
+        return vec3<f32>(edge_ends[i], edge_ends[i + 1u], edge_ends[i + 2u]);
+    }
+    let i = 7u * e + 1u + 3u * k;
+    return vec3<f32>(edge_faces[i], edge_faces[i + 1u], edge_faces[i + 2u]);
+}
+
 fn is_silhouette(e: u32) -> bool {
-    let a = edges[4u * e];
-    if a.w == 0.0 {
+    if edge_faces[7u * e] == 0.0 {
         return true;
     }
-    let b = edges[4u * e + 1u].xyz;
-    let m = cross(b - a.xyz, toward_at(a.xyz));
-    let s0 = dot3(m, edges[4u * e + 2u].xyz - a.xyz);
-    let s1 = dot3(m, edges[4u * e + 3u].xyz - a.xyz);
+    let a = edge_point(true, e, 0u);
+    let b = edge_point(true, e, 1u);
+    let m = cross(b - a, toward_at(a));
+    let s0 = dot3(m, edge_point(false, e, 0u) - a);
+    let s1 = dot3(m, edge_point(false, e, 1u) - a);
     return s0 == 0.0 || s1 == 0.0 || (s0 > 0.0) == (s1 > 0.0);
 }
 
@@ -27,8 +36,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let r2 = fr.res * fr.res;
     var pts: array<vec3<f32>, 4>;
-    pts[0] = edges[4u * e].xyz;
-    pts[1] = edges[4u * e + 1u].xyz;
+    pts[0] = edge_point(true, e, 0u);
+    pts[1] = edge_point(true, e, 1u);
     for (var vi = 0u; vi < fr.views; vi++) {
         let poly = project(vi, pts, 2u);
         let rows = row_range(poly);
