@@ -257,3 +257,59 @@ pub fn verdict_no_worse(
         errors: (eg, ec),
     }
 }
+
+/// [`verdict`] under `area`, the area light of `set`'s scene (whose stand-in `set`'s light
+/// is): both techniques see the frame with the area light, and the reference is the soft
+/// one integrating `n_light` light samples a pixel.
+pub fn verdict_area(
+    scene: &str,
+    set: &Set,
+    area: &shadowlab::area_light::AreaLight,
+    (gpu, cpu): (&str, &str),
+    params: &[&str],
+    n_light: u32,
+) -> Verdict {
+    use shadowlab::techniques::{self, Frame};
+    shadowlab_gpu::register();
+    let (s, c, l, view) = (&set.0, &set.1, &set.2, &set.3);
+    let frame = Frame::new(s, c, l, view).with_area(Some(area), n_light);
+    let make = |name: &str| {
+        let mut t = techniques::create(name).unwrap();
+        for p in params {
+            let (k, v) = p.split_once('=').unwrap();
+            t.set_param(k, v).unwrap();
+        }
+        t
+    };
+    let a = make(gpu).render(&frame).unwrap();
+    let b = make(gpu).render(&frame).unwrap();
+    assert!(
+        a.visibility.value == b.visibility.value,
+        "{scene}: two runs of {gpu} differ"
+    );
+    let cpu_shadows = make(cpu).render(&frame).unwrap();
+    let reference = shadowlab::soft_reference::soft_visibility(
+        &shadowlab::reference::Reference::build(s),
+        &frame,
+        area,
+        n_light,
+        &[shadowlab::math::vec2(0.5, 0.5)],
+    );
+    let truth = &reference.visibility;
+    let eg = shadowlab::compare::compare(view, &a.visibility, truth).mean_abs_error;
+    let ec = shadowlab::compare::compare(view, &cpu_shadows.visibility, truth).mean_abs_error;
+    assert!(
+        (eg - ec).abs() <= (ERROR_FACTOR * ec).max(ERROR_ABS),
+        "{scene}: {gpu}'s error {eg} against the soft reference is not within 10% of {cpu}'s {ec} (or {ERROR_ABS})"
+    );
+    let shadowed = a.visibility.value.iter().filter(|v| v.x < 0.5).count();
+    assert!(
+        shadowed > 50,
+        "{scene}: {gpu} has only {shadowed} shadowed pixels: the test shows nothing"
+    );
+    Verdict {
+        gpu: a.visibility.value,
+        cpu: cpu_shadows.visibility.value,
+        errors: (eg, ec),
+    }
+}

@@ -7,7 +7,7 @@
 use crate::compute::{pipeline, render_pipeline, to_rgb};
 use crate::device::{shared, Gpu};
 use crate::shader::{Stage, ALPHA_MASK, TRIANGLES};
-use crate::transfer::{grid, output, read_back, uniform, Timer};
+use crate::transfer::{grid, output, read_back, storage, uniform, Timer};
 use crate::upload::{view_buffer, SceneBuffers, SceneKey};
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::{Error, Result};
@@ -44,6 +44,35 @@ pub(crate) fn depth_scale(v: &LightView) -> f32 {
     }
 }
 
+/// `ViewU` of the look-ups (`shadow_map/lookup.wgsl`, `pcss/receiver.wgsl`): a light view
+/// as the look-up projects a receiver into it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct ViewU {
+    clip_from_world: [f32; 16],
+    light_from_world: [f32; 16],
+    ortho: u32,
+    near: f32,
+    extent: f32,
+    depth_scale: f32,
+}
+
+/// The light views as `ViewU`s in a storage buffer.
+pub(crate) fn view_table(gpu: &Gpu, views: &[LightView]) -> Result<wgpu::Buffer> {
+    let table: Vec<ViewU> = views
+        .iter()
+        .map(|v| ViewU {
+            clip_from_world: v.clip_from_world.to_cols_array(),
+            light_from_world: v.light_from_world.to_cols_array(),
+            ortho: u32::from(v.orthographic),
+            near: v.near,
+            extent: v.extent,
+            depth_scale: depth_scale(v),
+        })
+        .collect();
+    storage(gpu, "the light views", bytemuck::cast_slice(&table))
+}
+
 /// Threads per workgroup of the look-ups.
 pub(crate) const WORKGROUP: u32 = 64;
 
@@ -57,6 +86,23 @@ pub(crate) struct MapScene {
 }
 
 impl MapScene {
+    /// The scene of `frame` uploaded to the shared device.
+    pub(crate) fn upload(name: &str, frame: &Frame, stats: &mut Stats) -> Result<MapScene> {
+        let key = SceneKey::of(frame.scene);
+        let gpu = shared()?;
+        let scene = stats.stage("upload_scene", || {
+            gpu.stage(name, "upload_scene", || {
+                SceneBuffers::new(&gpu, frame.scene)
+            })
+        })??;
+        Ok(MapScene { key, gpu, scene })
+    }
+
+    /// Whether this is the scene of `frame`.
+    pub(crate) fn holds(&self, frame: &Frame) -> bool {
+        self.key == SceneKey::of(frame.scene)
+    }
+
     /// The scene of `frame` on the device, uploaded into `slot` unless it is there.
     pub(crate) fn keep<'a>(
         slot: &'a mut Option<MapScene>,
@@ -64,16 +110,9 @@ impl MapScene {
         frame: &Frame,
         stats: &mut Stats,
     ) -> Result<&'a MapScene> {
-        let key = SceneKey::of(frame.scene);
-        if slot.as_ref().is_none_or(|r| r.key != key) {
+        if slot.as_ref().is_none_or(|r| !r.holds(frame)) {
             *slot = None;
-            let gpu = shared()?;
-            let scene = stats.stage("upload_scene", || {
-                gpu.stage(name, "upload_scene", || {
-                    SceneBuffers::new(&gpu, frame.scene)
-                })
-            })??;
-            *slot = Some(MapScene { key, gpu, scene });
+            *slot = Some(MapScene::upload(name, frame, stats)?);
         }
         slot.as_ref()
             .ok_or_else(|| Error::Internal(format!("{name}: the scene was not uploaded")))

@@ -9,9 +9,11 @@ pub mod filtering;
 pub mod lispsm;
 mod maps;
 pub mod moments;
+pub mod pcss;
 pub mod perspective;
 pub mod raytrace;
 pub mod shadow_map;
+pub mod subpixel;
 pub mod variance;
 
 use filtering::GpuFiltered;
@@ -40,6 +42,8 @@ pub const ALL: &[&str] = &[
     moments::MSM_SOFT,
     convolution::CSM_SOFT,
     adaptive::NAME,
+    pcss::NAME,
+    subpixel::NAME,
 ];
 
 /// A GPU technique by name (`gpu:raytrace`, …), with the defaults of its CPU twin.
@@ -77,6 +81,8 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
             true,
         ),
         adaptive::NAME => Box::new(adaptive::GpuAdaptive::default()),
+        pcss::NAME => Box::new(pcss::GpuPcss::default()),
+        subpixel::NAME => Box::new(subpixel::GpuSubpixel::default()),
         _ => {
             return Err(Error::param(format!(
                 "unknown GPU technique {name:?}: the GPU techniques are {}",

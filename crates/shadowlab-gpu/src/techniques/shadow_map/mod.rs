@@ -20,9 +20,9 @@
 //! the verdict tests bound. The map is drawn by the hardware rasterizer on every adapter
 //! (`counters.hardware_raster = 1`); a compute rasterizer is not offered yet.
 
-use super::maps::{self, depth_scale, MapScene};
+use super::maps::{self, MapScene};
 use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
-use crate::transfer::{storage, uniform, Timer};
+use crate::transfer::{uniform, Timer};
 use crate::upload::LightU;
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::Result;
@@ -42,18 +42,6 @@ const LOOKUP: Stage = Stage {
     common: &[RAY_OFFSET, LIGHT, MAP_COMPARE, MAP_PIXELS],
     source: include_str!("lookup.wgsl"),
 };
-
-/// `ViewU` of `lookup.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct ViewU {
-    clip_from_world: [f32; 16],
-    light_from_world: [f32; 16],
-    ortho: u32,
-    near: f32,
-    extent: f32,
-    depth_scale: f32,
-}
 
 /// `Params` of `lookup.wgsl`.
 #[repr(C)]
@@ -163,18 +151,7 @@ impl ShadowTechnique for GpuShadowMap {
             pad: [0; 2],
         };
         let params = uniform(&gpu, "look-up parameters", &params);
-        let table: Vec<ViewU> = views
-            .iter()
-            .map(|v| ViewU {
-                clip_from_world: v.clip_from_world.to_cols_array(),
-                light_from_world: v.light_from_world.to_cols_array(),
-                ortho: u32::from(v.orthographic),
-                near: v.near,
-                extent: v.extent,
-                depth_scale: depth_scale(v),
-            })
-            .collect();
-        let table = storage(&gpu, "the light views", bytemuck::cast_slice(&table))?;
+        let table = maps::view_table(&gpu, &views)?;
         let sampler = maps::comparison_sampler(&gpu);
         let array = maps::array_view(&texture);
         let value = maps::look_up(
@@ -204,7 +181,7 @@ mod tests {
     #[test]
     fn mirrored_structs_have_the_wgsl_sizes() {
         assert_eq!(std::mem::size_of::<maps::FaceU>(), 144);
-        assert_eq!(std::mem::size_of::<ViewU>(), 144);
+        assert_eq!(std::mem::size_of::<maps::ViewU>(), 144);
         assert_eq!(std::mem::size_of::<LookupParams>(), 80);
     }
 }

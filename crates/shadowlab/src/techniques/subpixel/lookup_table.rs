@@ -191,6 +191,11 @@ impl LutCache {
         UNCERTAIN_MARGIN * (LUT_REACH / LUT_DISTANCES as f32 + offset * 4.0 / LUT_ANGLES as f32)
     }
 
+    /// The entries' masks and their uncertain samples, entry by entry.
+    pub(super) fn entries(&self) -> (&[u128], &[u128]) {
+        (&self.masks, &self.uncertain)
+    }
+
     /// Bytes held by the table at `mask_bytes` per mask.
     pub(super) fn bytes(&self, mask_bytes: usize) -> u64 {
         (2 * self.masks.len() * mask_bytes + self.samples.len() * 8) as u64
@@ -264,6 +269,33 @@ impl<M: Mask> Lut<M> {
         }
         m
     }
+}
+
+/// A pattern's half-plane look-up table as [`Subpixel`] builds it once per pattern and
+/// sample count, for a twin that uploads it (the GPU's `gpu:subpixel`).
+#[derive(Clone, Debug)]
+pub struct LookupTable {
+    /// Sample positions, pixel-local in `[0, 1)²`, in bit order.
+    pub samples: Vec<Vec2>,
+    /// Index of the sample on the pixel centre.
+    pub centre: usize,
+    /// `LUT_ANGLES × LUT_DISTANCES` entries (angle-major): the samples on the positive side
+    /// of the entry's line.
+    pub masks: Vec<u128>,
+    /// Per entry, the samples close enough to its line to be tested exactly.
+    pub uncertain: Vec<u128>,
+}
+
+/// The look-up table of `n` samples of `kind` (see [`LookupTable`]).
+pub fn lookup_table(kind: PatternKind, n: u32) -> Result<LookupTable> {
+    let c = LutCache::build(kind, n)?;
+    let (masks, uncertain) = c.entries();
+    Ok(LookupTable {
+        masks: masks.to_vec(),
+        uncertain: uncertain.to_vec(),
+        samples: c.samples.clone(),
+        centre: c.centre,
+    })
 }
 
 #[cfg(test)]

@@ -129,7 +129,8 @@ mod silhouette_mask_map;
 mod visibility_evaluation;
 
 pub use facets::{FACET_SHRINK_STEPS, MAX_FACET_STRETCH};
-pub use lookup_table::{LUT_ANGLES, LUT_DISTANCES};
+pub use lookup_table::{lookup_table, LookupTable, LUT_ANGLES, LUT_DISTANCES};
+pub use silhouette_edges::{edge_adjacency, EdgeAdjacency};
 pub use silhouette_mask_map::HIDDEN_SILHOUETTE_BIAS;
 pub use visibility_evaluation::COPLANAR_TOLERANCE;
 

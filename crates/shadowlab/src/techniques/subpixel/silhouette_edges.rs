@@ -135,6 +135,11 @@ impl Adjacency {
         adj
     }
 
+    /// The opposite vertex of every face that shares edge `e`.
+    pub(super) fn faces(&self, e: usize) -> &[Vec3] {
+        &self.opp[self.opp_start[e] as usize..self.opp_start[e + 1] as usize]
+    }
+
     /// Number of edges.
     pub(super) fn len(&self) -> usize {
         self.a.len()
@@ -196,4 +201,33 @@ pub(super) fn silhouette_edges(adj: &Adjacency, toward: &Toward) -> Vec<u32> {
         .with_min_len(1024)
         .filter(|&e| adj.is_silhouette(e as usize, toward))
         .collect()
+}
+
+/// The scene's edges as the silhouette test reads them, built once per scene as
+/// [`Subpixel`] builds them (vertices welded by bit-identical position).
+#[derive(Clone, Debug)]
+pub struct EdgeAdjacency {
+    /// First endpoint of each edge.
+    pub a: Vec<Vec3>,
+    /// Second endpoint of each edge.
+    pub b: Vec<Vec3>,
+    /// Per edge, the opposite vertices of its two faces, or `None` when it has not exactly
+    /// two (a boundary or non-manifold edge, always a silhouette).
+    pub faces: Vec<Option<[Vec3; 2]>>,
+}
+
+/// The edge adjacency of `scene` (see [`EdgeAdjacency`]).
+pub fn edge_adjacency(scene: &Scene) -> EdgeAdjacency {
+    let adj = Adjacency::build(scene, fingerprint(scene));
+    let faces = (0..adj.len())
+        .map(|e| match adj.faces(e) {
+            [f0, f1] => Some([*f0, *f1]),
+            _ => None,
+        })
+        .collect();
+    EdgeAdjacency {
+        a: adj.a.clone(),
+        b: adj.b.clone(),
+        faces,
+    }
 }

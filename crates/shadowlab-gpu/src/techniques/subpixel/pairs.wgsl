@@ -1,0 +1,176 @@
+// gpu:subpixel, stage `pairs` (Pan et al. 2009, Section 3.3; the library's `pairs.rs`):
+// pixel–texel pairs, each facet rasterized conservatively into its view's texels; a facet
+// that touches no silhouette texel after all takes the depth-map test, the others mark
+// their texels with their farthest depth (`pixel_texels`); the marked texels get slots
+// (`slots`); triangle–texel pairs, every triangle rasterized the same way against the
+// slotted texels it can be nearer than, counted per slot, the counts scanned into starts
+// (`scan_blocks`, `scan`, `scan_slots`), filled (`triangle_texels_main` twice), and each
+// slot's list sorted (`sort_pairs`). Slot numbers vary from run to run; what a slot
+// holds, in its sorted order, does not. Composed after subpixel/{bindings,
+// rasterization}.wgsl.
+
+// A triangle pairs with a texel when it is nearer than the farthest facet there, by this
+// share of that depth more than the CPU asks: the GPU may round a facet's or a
+// triangle's light depth differently, and a caster standing on the receiver (a chess
+// piece on the board) is as deep as the facets under it, where the rounding would decide
+// whether it is paired and so whether its crease drops samples. A pair too many is only
+// evaluated (the evaluation is exact), a pair too few loses a blocker.
+const PAIR_DEPTH_MARGIN: f32 = 1e-5;
+
+@compute @workgroup_size(64)
+fn pixel_texels(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let fi = thread_index(gid);
+    if fi >= fr.pixels || facets[fi].alive == 0u {
+        return;
+    }
+    let poly = facet_poly(fi);
+    let vi = facets[fi].view;
+    let base = vi * fr.res * fr.res;
+    let rows = row_range(poly);
+    var touches = false;
+    for (var y = rows.x; y <= rows.y && rows.x <= rows.y && !touches; y++) {
+        let s = row_span(poly, rows, y);
+        for (var x = s.x0; x <= s.x1 && s.some; x++) {
+            touches = touches || sil_mask[base + y * fr.res + x] == 1u;
+        }
+    }
+    if !touches {
+        facets[fi].alive = 0u;
+        write_out(facets[fi].k, depth_test(facets[fi].k, vi));
+        return;
+    }
+    let d = depth_bits(facets[fi].depth_max);
+    for (var y = rows.x; y <= rows.y && rows.x <= rows.y; y++) {
+        let s = row_span(poly, rows, y);
+        for (var x = s.x0; x <= s.x1 && s.some; x++) {
+            atomicMax(&max_depth[base + y * fr.res + x], d);
+        }
+    }
+}
+
+@compute @workgroup_size(64)
+fn slots(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let t = thread_index(gid);
+    if t >= fr.res * fr.res * fr.views {
+        return;
+    }
+    if atomicLoad(&max_depth[t]) == 0u {
+        slot[t] = 0u;
+    } else {
+        slot[t] = atomicAdd(&counters[1], 1u) + 1u;
+    }
+}
+
+// Rasterizes triangle-view pair `i` against the slotted texels: counts (fill = false) or
+// writes (fill = true) its pairs.
+fn triangle_texels(i: u32, fill: bool) {
+    let tri = i / fr.views;
+    let vi = i % fr.views;
+    if tri >= fr.triangles {
+        return;
+    }
+    var pts: array<vec3<f32>, 4>;
+    pts[0] = vertex(tri, 0u);
+    pts[1] = vertex(tri, 1u);
+    pts[2] = vertex(tri, 2u);
+    let poly = project(vi, pts, 3u);
+    let rows = row_range(poly);
+    let base = vi * fr.res * fr.res;
+    for (var y = rows.x; y <= rows.y && rows.x <= rows.y; y++) {
+        let s = row_span(poly, rows, y);
+        if !s.some {
+            continue;
+        }
+        let dmin = depth_span(vi, s.k0, s.k1).x;
+        for (var x = s.x0; x <= s.x1; x++) {
+            let t = base + y * fr.res + x;
+            let sl = slot[t];
+            let far = bitcast<f32>(atomicLoad(&max_depth[t]));
+            if sl != 0u && dmin < far + PAIR_DEPTH_MARGIN * abs(far) {
+                let at = atomicAdd(&slot_fill[sl - 1u], 1u);
+                if fill {
+                    pairs[slot_start[sl - 1u] + at] = tri;
+                }
+            }
+        }
+    }
+}
+
+// One entry point counts and fills (counters[3] says which, set by `scan`), so both
+// passes run the same code and find the same texels: a driver may round a separately
+// compiled copy differently.
+@compute @workgroup_size(64)
+fn triangle_texels_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    triangle_texels(thread_index(gid), atomicLoad(&counters[3]) == 1u);
+}
+
+// Slots are scanned in blocks of SCAN_BLOCK: each block's total (`scan_blocks`, one
+// thread a block), the totals into block starts (`scan`, one thread), then each block's
+// own starts (`scan_slots`, one thread a block), the counts cleared for the fill. The
+// block totals live in `nearest`, which the silhouette mask map no longer needs.
+const SCAN_BLOCK: u32 = 256u;
+
+@compute @workgroup_size(64)
+fn scan_blocks(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let blk = thread_index(gid);
+    let n = atomicLoad(&counters[1]);
+    if blk * SCAN_BLOCK >= n {
+        return;
+    }
+    var sum = 0u;
+    for (var s = blk * SCAN_BLOCK; s < min(n, (blk + 1u) * SCAN_BLOCK); s++) {
+        sum += atomicLoad(&slot_fill[s]);
+    }
+    atomicStore(&nearest[blk], sum);
+}
+
+@compute @workgroup_size(1)
+fn scan(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let n = atomicLoad(&counters[1]);
+    let blocks = (n + SCAN_BLOCK - 1u) / SCAN_BLOCK;
+    var sum = 0u;
+    for (var b = 0u; b < blocks; b++) {
+        let t = atomicLoad(&nearest[b]);
+        atomicStore(&nearest[b], sum);
+        sum += t;
+    }
+    slot_start[n] = sum;
+    atomicStore(&counters[2], sum);
+    atomicStore(&counters[3], 1u);
+}
+
+@compute @workgroup_size(64)
+fn scan_slots(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let blk = thread_index(gid);
+    let n = atomicLoad(&counters[1]);
+    if blk * SCAN_BLOCK >= n {
+        return;
+    }
+    var sum = atomicLoad(&nearest[blk]);
+    for (var s = blk * SCAN_BLOCK; s < min(n, (blk + 1u) * SCAN_BLOCK); s++) {
+        slot_start[s] = sum;
+        sum += atomicLoad(&slot_fill[s]);
+        atomicStore(&slot_fill[s], 0u);
+    }
+}
+
+// One thread a slot: its triangles sorted by index (insertion sort; a slot holds few), so
+// the evaluation meets them in one order whatever order the fill wrote them in.
+@compute @workgroup_size(64)
+fn sort_pairs(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let s = thread_index(gid);
+    if s >= atomicLoad(&counters[1]) {
+        return;
+    }
+    let a = slot_start[s];
+    let b = slot_start[s + 1u];
+    for (var i = a + 1u; i < b; i++) {
+        let t = pairs[i];
+        var j = i;
+        while j > a && pairs[j - 1u] > t {
+            pairs[j] = pairs[j - 1u];
+            j--;
+        }
+        pairs[j] = t;
+    }
+}
