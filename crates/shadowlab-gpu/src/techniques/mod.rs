@@ -31,3 +31,15 @@ pub fn create(name: &str) -> Result<Box<dyn ShadowTechnique>> {
         }
     })
 }
+
+/// The GPU technique `name` with its on-device path ([`crate::resident::OnDevice`]: the
+/// shadow term left in a device buffer), when it has one.
+pub fn create_on_device(name: &str) -> Option<Box<dyn crate::resident::OnDevice>> {
+    Some(match name {
+        shadow_map::SM => Box::new(shadow_map::GpuShadowMap::standard()),
+        shadow_map::PCF => Box::new(shadow_map::GpuShadowMap::pcf()),
+        raytrace::NAME => Box::new(raytrace::GpuRayTrace::default()),
+        alias_free::NAME => Box::new(alias_free::GpuAliasFree::default()),
+        _ => return None,
+    })
+}

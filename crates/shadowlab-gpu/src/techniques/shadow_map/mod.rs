@@ -22,6 +22,7 @@
 
 use crate::compute::{bind_entries, pipeline, render_pipeline, to_rgb};
 use crate::device::{shared, Gpu};
+use crate::resident::{DeviceShadows, OnDevice};
 use crate::shader::{Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, TRIANGLES};
 use crate::transfer::{grid, output, read_back, storage, uniform, Timer};
 use crate::upload::{view_buffer, LightU, SceneBuffers, SceneKey};
@@ -197,11 +198,38 @@ impl ShadowTechnique for GpuShadowMap {
     }
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
+        let gpu = shared()?;
+        let n = frame.view.triangle.len() as u64;
+        let mut stats = Stats::default();
+        let view = stats.stage("upload_view", || view_buffer(&gpu, frame.view))?;
+        let out = self.shadow_term(frame, &view, &mut stats)?;
+        let raw = stats.stage("readback", || {
+            gpu.stage(self.name, "readback", || read_back(&gpu, &out, n * 12))
+        })??;
+        Ok(Shadows::of_frame(frame, to_rgb(&raw), stats))
+    }
+}
+
+impl OnDevice for GpuShadowMap {
+    fn render_on_device(&mut self, frame: &Frame, view: &wgpu::Buffer) -> Result<DeviceShadows> {
+        let mut stats = Stats::default();
+        let visibility = self.shadow_term(frame, view, &mut stats)?;
+        Ok(DeviceShadows { visibility, stats })
+    }
+}
+
+impl GpuShadowMap {
+    /// The maps and the look-up over the uploaded `view`: the shadow terms on the device.
+    fn shadow_term(
+        &mut self,
+        frame: &Frame,
+        view: &wgpu::Buffer,
+        stats: &mut Stats,
+    ) -> Result<wgpu::Buffer> {
         let name = self.name;
         let res_side = check_resolution(name, self.cpu.resolution)?;
-        let mut stats = Stats::default();
         let cpu = self.cpu.clone();
-        let res = self.resident(frame, &mut stats)?;
+        let res = self.resident(frame, stats)?;
         let gpu = res.gpu.clone();
         gpu.check_texture_side(&format!("{name}.resolution"), res_side)?;
         let views = light_views(
@@ -218,7 +246,6 @@ impl ShadowTechnique for GpuShadowMap {
             )));
         }
         let n = frame.view.triangle.len() as u32;
-        let view = stats.stage("upload_view", || view_buffer(&gpu, frame.view))?;
         let out = output(&gpu, "the shadow terms", u64::from(n) * 12)?;
         let mut timer = Timer::new(&gpu, 8);
         let map = stats.stage("shadow_map", || {
@@ -228,12 +255,7 @@ impl ShadowTechnique for GpuShadowMap {
         })??;
         stats.stage("lookup", || {
             gpu.stage(name, "lookup", || {
-                lookup(res, frame, &cpu, &views, &map, &view, &out, &mut timer)
-            })
-        })??;
-        let raw = stats.stage("readback", || {
-            gpu.stage(name, "readback", || {
-                read_back(&gpu, &out, u64::from(n) * 12)
+                lookup(res, frame, &cpu, &views, &map, view, &out, &mut timer)
             })
         })??;
         for (stage, ms) in timer.read(&gpu)? {
@@ -246,7 +268,7 @@ impl ShadowTechnique for GpuShadowMap {
         );
         stats.count("hardware_raster", 1.0);
         stats.device = Some(gpu.adapter.label());
-        Ok(Shadows::of_frame(frame, to_rgb(&raw), stats))
+        Ok(out)
     }
 }
 
