@@ -11,6 +11,9 @@
 #   (goals: gpu:afsm at most gpu:raytrace; 32 samples at most 2.5x one; 32 samples under
 #   16 ms). GPU times are the counters gpu_*_ms; the 32-sample run's sub-pixel primary
 #   hits are traced on the CPU (stage subpixel_hits), outside the GPU time;
+# - viewer-{sm,afsm}.txt: `view --benchmark-frames 120` at 1920x1080 on chessboard with
+#   gpu:sm and gpu:afsm, the error overlay on (goal: 60 frames a second), under Xvfb when
+#   the machine has it (a window needs a display; skipped otherwise);
 # - gpu-bench.log: everything printed.
 #
 #   scripts/gpu-bench.sh BINARY OUTDIR
@@ -86,6 +89,16 @@ hair=(render --force --scene hairball --width 1920 --height 1080)
 run "${hair[@]}" --technique gpu:afsm --stats "$out/hairball-afsm-1.json"
 run "${hair[@]}" --technique gpu:afsm --param samples=32 --stats "$out/hairball-afsm-32.json"
 run "${hair[@]}" --technique gpu:raytrace --stats "$out/hairball-raytrace.json"
+if command -v xvfb-run >/dev/null 2>&1; then
+    viewer=(view --scene chessboard --width 1920 --height 1080 --error-overlay --benchmark-frames 120)
+    for t in sm afsm; do
+        say "running: xvfb-run $binary ${viewer[*]} --technique gpu:$t"
+        timeout "$(left)" xvfb-run -a -s "-screen 0 2400x1200x24" \
+            "$binary" "${viewer[@]}" --technique "gpu:$t" 2>&1 | tee "$out/viewer-$t.txt" >>"$log"
+    done
+else
+    say "no xvfb-run here: the viewer's benchmark is skipped"
+fi
 set -e
 say "bench gpu's exit status $status"
 exit "$status"

@@ -265,6 +265,28 @@ fn without_a_display_view_says_so() {
 }
 
 #[test]
+fn without_an_adapter_view_says_so() {
+    let Some(x) = Xvfb::start() else {
+        eprintln!(
+            "skipping the viewer's adapter test: Xvfb is not installed (.ci/run installs it)"
+        );
+        return;
+    };
+    let d = tmp("noadapter");
+    // The Vulkan loader finds no driver: no adapter at all.
+    let r = quiet()
+        .current_dir(&d)
+        .env("DISPLAY", &x.display)
+        .env("VK_ICD_FILENAMES", d.join("none.json"))
+        .env("VK_DRIVER_FILES", d.join("none.json"))
+        .args([
+            "view", "--scene", "bunny", "--width", "64", "--height", "48",
+        ])
+        .ran();
+    refused(&r, &["GPU adapter", "mesa-vulkan-drivers"]);
+}
+
+#[test]
 fn a_bad_script_is_refused_before_any_window() {
     let d = tmp("badscript");
     std::fs::write(d.join("s.txt"), "key tab\nkey f13\n").unwrap();

@@ -443,7 +443,7 @@ impl App<'_> {
     fn measure_on_device(&mut self) {
         let s = &self.session;
         let (Some(d), Some(on), Some(shading), Some(w), true, None) = (
-            &self.drawn,
+            &mut self.drawn,
             &self.on_device,
             &mut self.shading,
             &self.window,
@@ -455,7 +455,10 @@ impl App<'_> {
         let t0 = Instant::now();
         let spp = reference::spp_for(&s.name);
         match shading.measure(s.scene, &s.light, d, on, spp, &w.textures.error) {
-            Ok(f) => self.error = Some(f),
+            Ok((f, times)) => {
+                self.error = Some(f);
+                d.counters.extend(times);
+            }
             Err(e) => {
                 self.session.status = crate::failure::sentence(&e);
                 self.session.show.error = false;

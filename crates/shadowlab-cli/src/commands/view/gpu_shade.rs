@@ -144,7 +144,8 @@ impl GpuShading {
     }
 
     /// Traces the reference with `spp` samples a pixel over the drawn frame `d`, compares
-    /// it with the technique's shadow term into `overlay`, and returns the figures.
+    /// it with the technique's shadow term into `overlay`, and returns the figures and the
+    /// GPU times of the trace and the comparison (`gpu_STAGE_ms`).
     pub fn measure(
         &mut self,
         scene: &Scene,
@@ -153,7 +154,7 @@ impl GpuShading {
         on: &OnDeviceFrame,
         spp: u32,
         overlay: &wgpu::Texture,
-    ) -> Result<ErrorFigures> {
+    ) -> Result<(ErrorFigures, Vec<(String, f64)>)> {
         self.reference.set_param("spp", &spp.to_string())?;
         let f = Frame::new(scene, &d.camera, light, &d.view);
         let reference = self.reference.render_on_device(&f, &on.view)?;
@@ -179,16 +180,25 @@ impl GpuShading {
             ],
             overlay,
         );
-        self.dispatch("measure", &group, size)?;
+        let measure_ms = self.dispatch("measure", &group, size)?;
+        let mut times: Vec<(String, f64)> = reference
+            .stats
+            .counters
+            .iter()
+            .filter(|(k, _)| k.starts_with("gpu_") && k.ends_with("_ms"))
+            .map(|(k, v)| (format!("gpu_error_{}", &k[4..]), *v))
+            .collect();
+        times.push(("gpu_error_compare_ms".to_string(), measure_ms));
         let raw = read_back(&self.gpu, &sums, 16)?;
         let w: Vec<u32> = bytemuck::pod_collect_to_vec(&raw);
         let covered = f64::from(w[0]).max(1.0);
         let sum = (f64::from(w[3]) * 4294967296.0 + f64::from(w[2])) / 65536.0;
-        Ok(ErrorFigures {
+        let figures = ErrorFigures {
             mismatch_rate: f64::from(w[1]) / covered,
             mean_abs_error: sum / covered,
             reference_spp: spp,
-        })
+        };
+        Ok((figures, times))
     }
 
     fn group(
