@@ -493,7 +493,8 @@ fn the_panel_switches_technique_sets_a_parameter_and_shows_the_error() {
          wait-reference\n\
          screenshot sm-on.png\n\
          click error overlay\n\
-         screenshot sm-off.png\n",
+         screenshot sm-off.png\n\
+         click copy command line\n",
     )
     .unwrap();
     let r = view(
@@ -513,6 +514,16 @@ fn the_panel_switches_technique_sets_a_parameter_and_shows_the_error() {
         ],
     );
     support::ok(&r);
+    // "copy command line" prints what it puts on the clipboard: the view's render command.
+    let copied = r
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("shadowlab render"))
+        .unwrap_or_else(|| panic!("no command line printed: {}", r.stdout));
+    assert!(
+        copied.contains("--technique gpu:sm --param resolution=256"),
+        "{copied}"
+    );
     let shot = |n: &str| {
         let (img, j) = screenshot(&d, n);
         (view_of(&img, &j), j)

@@ -135,6 +135,11 @@ impl App<'_> {
         };
         let mut raw = w.state.take_egui_input(&w.window);
         raw.events.extend(injected);
+        // A point is a pixel whatever the display's scale: the panel lies beside a view
+        // whose pixels are render's.
+        if let Some(v) = raw.viewports.get_mut(&egui::ViewportId::ROOT) {
+            v.native_pixels_per_point = Some(1.0);
+        }
         let ctx = w.egui.clone();
         let mut actions = Vec::new();
         let mut widgets = Widgets::default();
