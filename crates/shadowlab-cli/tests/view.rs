@@ -309,16 +309,22 @@ fn a_bad_script_is_refused_before_any_window() {
     refused(&r, &["s.txt"]);
 }
 
-/// The centre of the panel's widget `label` in screenshot `shot`, as xdotool's arguments.
-fn widget_centre(shot: &Value, label: &str) -> (String, String) {
+/// The rectangle of the panel's widget `label` in screenshot `shot`: x0, y0, x1, y1.
+fn widget_rect(shot: &Value, label: &str) -> (u32, u32, u32, u32) {
     let w = shot["widgets"]
         .as_array()
         .unwrap()
         .iter()
         .find(|w| w["name"] == label)
         .unwrap_or_else(|| panic!("no widget {label:?} in {shot}"));
-    let c = |a: &str, b: &str| (w[a].as_u64().unwrap() + w[b].as_u64().unwrap()) / 2;
-    (c("x0", "x1").to_string(), c("y0", "y1").to_string())
+    let n = |k: &str| w[k].as_u64().unwrap() as u32;
+    (n("x0"), n("y0"), n("x1"), n("y1"))
+}
+
+/// The centre of the panel's widget `label` in screenshot `shot`, as xdotool's arguments.
+fn widget_centre(shot: &Value, label: &str) -> (String, String) {
+    let (x0, y0, x1, y1) = widget_rect(shot, label);
+    (((x0 + x1) / 2).to_string(), ((y0 + y1) / 2).to_string())
 }
 
 /// Runs xdotool on the display of `x`; returns what it printed.
@@ -494,7 +500,10 @@ fn the_panel_switches_technique_sets_a_parameter_and_shows_the_error() {
          screenshot sm-on.png\n\
          click error overlay\n\
          screenshot sm-off.png\n\
-         click copy command line\n",
+         click copy command line\n\
+         click technique view\n\
+         click view shadow map 0\n\
+         screenshot map.png\n",
     )
     .unwrap();
     let r = view(
@@ -552,6 +561,22 @@ fn the_panel_switches_technique_sets_a_parameter_and_shows_the_error() {
         marked > 0,
         "the error overlay of gpu:sm at 256 texels marks pixels"
     );
+    // The map's layer, drawn from the device: near casters darker than the far ground, in
+    // many grey levels.
+    let (map_shot, mj) = screenshot(&d, "map");
+    let (x0, y0, x1, y1) = widget_rect(&mj, "shadow map picture");
+    let mut levels = std::collections::BTreeSet::new();
+    for y in y0..y1 {
+        for x in x0..x1 {
+            let p = map_shot.get_pixel(x, y).0;
+            assert!(
+                p[0] == p[1] && p[1] == p[2],
+                "the map is grey: {p:?} at {x},{y}"
+            );
+            levels.insert(p[0]);
+        }
+    }
+    assert!(levels.len() > 16, "the map shows depths: {levels:?}");
     // Without the overlay the view is render's image of the command line shown.
     assert_eq!(
         sm_off,

@@ -24,4 +24,11 @@ pub trait OnDevice: ShadowTechnique {
     /// ([`crate::upload::view_buffer`]). Small control words (timestamps, a technique's
     /// overflow flags) may still be read.
     fn render_on_device(&mut self, frame: &Frame, view: &wgpu::Buffer) -> Result<DeviceShadows>;
+
+    /// The last frame's depth maps, for a viewer to show: a `Depth32Float` array texture,
+    /// one layer a light view, holding linear depth over the view's far plane. `None` for
+    /// a technique without maps.
+    fn depth_maps(&self) -> Option<&wgpu::Texture> {
+        None
+    }
 }

@@ -6,6 +6,7 @@
 use super::frame::{self, Drawn};
 use super::gpu_shade::{GpuShading, OnDeviceFrame};
 use super::input::Drag;
+use super::map_view::MapView;
 use super::reference::{self, Background, Traced};
 use super::screenshot::{self, ErrorFigures};
 use super::session::{Session, Technique};
@@ -78,6 +79,8 @@ pub struct App<'a> {
     pub(super) on_device: Option<OnDeviceFrame>,
     pub(super) measure_ms: f64,
     pub(super) upload_ms: f64,
+    pub(super) map_layers: u32,
+    pub(super) map_view: Option<MapView>,
     pub(super) click_waits: usize,
     pub(super) dump: Option<(usize, egui::TextureHandle, [f32; 2])>,
     pub(super) clipboard: Option<arboard::Clipboard>,
@@ -117,6 +120,8 @@ impl<'a> App<'a> {
             on_device: None,
             measure_ms: 0.0,
             upload_ms: 0.0,
+            map_layers: 0,
+            map_view: None,
             click_waits: 0,
             dump: None,
             clipboard: None,
@@ -279,6 +284,7 @@ impl<'a> App<'a> {
                 self.error = None;
                 self.measure_ms = 0.0;
                 self.show_dump();
+                self.show_map();
                 Ok(())
             }
             Err(e) if matches!(self.driver, Driver::Person) => {
@@ -328,29 +334,6 @@ impl<'a> App<'a> {
                 Ok((d, None))
             }
         }
-    }
-
-    /// The technique's image chosen, as egui's texture.
-    fn show_dump(&mut self) {
-        let (Some(d), Some(w)) = (&self.drawn, &self.window) else {
-            return;
-        };
-        let chosen = self.session.show.dump;
-        if chosen.is_some_and(|i| i >= d.dumps.len()) {
-            self.session.show.dump = None;
-            if d.dumps.is_empty() {
-                self.session.status = format!("{} shows no images", self.session.name);
-            }
-        }
-        self.dump = self.session.show.dump.and_then(|i| {
-            let (name, img) = d.dumps.get(i)?;
-            let size = [img.width() as usize, img.height() as usize];
-            let colour = egui::ColorImage::from_rgb(size, img.as_raw());
-            let t = w
-                .egui
-                .load_texture(name, colour, egui::TextureOptions::NEAREST);
-            Some((i, t, [size[0] as f32, size[1] as f32]))
-        });
     }
 
     /// Asks the worker for the reference of the view shown, and measures the frame

@@ -18,6 +18,7 @@ mod fly;
 mod frame;
 mod gpu_shade;
 mod input;
+mod map_view;
 mod panel;
 mod play;
 mod reference;
@@ -25,6 +26,7 @@ mod reproduce;
 mod screenshot;
 mod script;
 mod session;
+mod timings;
 mod ui;
 mod window;
 

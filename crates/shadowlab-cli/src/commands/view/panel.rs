@@ -109,6 +109,11 @@ pub fn apply(s: &mut Session, a: Action) -> Option<Action> {
             s.show.overlays = true;
             s.stale = true;
         }
+        Action::MapLayer(l) => {
+            s.show.map = l;
+            s.show.overlays = true;
+            s.dirty = true;
+        }
         Action::Dump(i) => {
             s.show.dump = i;
             s.show.overlays = true;
@@ -217,6 +222,8 @@ impl App<'_> {
             error_on: s.show.error,
             dumps,
             dump: self.dump.as_ref().map(|(i, t, size)| (*i, t.id(), *size)),
+            maps: self.map_layers,
+            map: self.map_view.as_ref().map(|m| (m.layer, m.id)),
             status: &s.status,
             command: super::reproduce::command_line(&self.render_args(Path::new("view.png"))),
         }

@@ -19,7 +19,8 @@
 //! Labels: `cpu technique` and `gpu technique` (the pickers; once open, each technique by
 //! its name), each parameter's key (its field) and `KEY slider`, `KEY=WORD` in an open
 //! choice, `directional` `point` `spot`, `light x` `light y` `light z`, `error overlay`,
-//! `technique view` (then `view NAME`, `view none`), `screenshot`, `copy command line`.
+//! `technique view` (then `view NAME`, `view shadow map N`, `view none`), `screenshot`,
+//! `copy command line`.
 
 use super::input::{Drag, Key, Move};
 use crate::failure::bad_input;

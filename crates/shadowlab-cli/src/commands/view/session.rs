@@ -23,6 +23,8 @@ pub struct Show {
     pub error: bool,
     /// The technique's image shown, by its index among those it dumps.
     pub dump: Option<usize>,
+    /// The layer of the technique's depth maps shown (drawn on the device).
+    pub map: Option<u32>,
 }
 
 /// A technique, with its on-device path when it has one.
@@ -126,6 +128,7 @@ impl<'a> Session<'a> {
                 overlays: true,
                 error: false,
                 dump: None,
+                map: None,
             },
             status: String::new(),
             screenshot: false,
@@ -223,6 +226,7 @@ impl<'a> Session<'a> {
                 self.technique = t;
                 self.name = name.to_string();
                 self.show.dump = None;
+                self.show.map = None;
                 self.dirty = true;
                 self.stale = true;
                 self.status.clear();

@@ -33,6 +33,8 @@ pub enum Action {
     Error(bool),
     /// The technique's image shown, by index; `None` for none.
     Dump(Option<usize>),
+    /// The layer of the technique's depth maps shown (on the device); `None` for none.
+    MapLayer(Option<u32>),
     /// A screenshot.
     Screenshot,
     /// The `render` command line to the clipboard.
@@ -111,6 +113,10 @@ pub struct PanelState<'a> {
     pub dumps: Vec<String>,
     /// The image shown.
     pub dump: Option<(usize, egui::TextureId, [f32; 2])>,
+    /// The layers of the technique's depth maps on the device (0 for none).
+    pub maps: u32,
+    /// The layer shown and its picture.
+    pub map: Option<(u32, egui::TextureId)>,
     /// The last message.
     pub status: &'a str,
     /// The command line of the view.
@@ -158,7 +164,7 @@ pub fn panel(
                         light(ui, s, &mut out, &mut w);
                         actions(ui, s, &mut out, &mut w);
                         views(ui, s, &mut out, &mut w);
-                        timings(ui, s);
+                        super::timings::timings(ui, s);
                     });
                 });
         });
@@ -357,59 +363,6 @@ fn light(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widge
     ui.label("area lights: not in the viewer (render --area-light)");
 }
 
-fn timings(ui: &mut egui::Ui, s: &PanelState) {
-    ui.separator();
-    ui.label(&s.backend);
-    ui.label(format!("adapter: {}", s.adapter));
-    let Some(last) = s.history.back() else {
-        return;
-    };
-    let total: f64 = last.iter().map(|(_, ms)| ms).sum();
-    ui.label(format!(
-        "frame {total:.1} ms ({:.1} fps)",
-        1e3 / total.max(1e-3)
-    ));
-    let width = ui.available_width();
-    let most = last.iter().map(|(_, ms)| *ms).fold(1e-3, f64::max);
-    for (name, ms) in last {
-        ui.horizontal(|ui| {
-            let (rect, _) = ui.allocate_exact_size(egui::vec2(90.0, 12.0), egui::Sense::hover());
-            let fill = egui::Rect::from_min_size(
-                rect.min,
-                egui::vec2((90.0 * ms / most) as f32, rect.height()),
-            );
-            ui.painter()
-                .rect_filled(fill, 0.0, egui::Color32::from_rgb(90, 160, 220));
-            ui.label(format!("{ms:7.2} ms {name}"));
-        });
-    }
-    // The frame time of the last frames, as a line.
-    let (rect, _) = ui.allocate_exact_size(egui::vec2(width, 50.0), egui::Sense::hover());
-    ui.painter()
-        .rect_filled(rect, 0.0, egui::Color32::from_gray(12));
-    let totals: Vec<f64> = s
-        .history
-        .iter()
-        .map(|f| f.iter().map(|(_, ms)| ms).sum())
-        .collect();
-    let top = totals.iter().copied().fold(1e-3, f64::max);
-    let points: Vec<egui::Pos2> = totals
-        .iter()
-        .enumerate()
-        .map(|(i, t)| {
-            egui::pos2(
-                rect.left() + rect.width() * i as f32 / (HISTORY - 1) as f32,
-                rect.bottom() - rect.height() * (*t / top) as f32,
-            )
-        })
-        .collect();
-    ui.painter().add(egui::Shape::line(
-        points,
-        egui::Stroke::new(1.0, egui::Color32::from_rgb(230, 200, 80)),
-    ));
-    ui.label(format!("last {} frames, top {top:.1} ms", totals.len()));
-}
-
 fn error(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widgets) {
     ui.separator();
     let mut on = s.error_on;
@@ -428,14 +381,24 @@ fn views(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widge
     let shown = s.dump.map(|d| d.0);
     let text = shown
         .and_then(|i| s.dumps.get(i).cloned())
+        .or_else(|| s.map.map(|m| format!("shadow map {}", m.0)))
         .unwrap_or_else(|| "none".to_string());
     let r = egui::ComboBox::from_id_salt("technique view")
         .selected_text(text)
         .show_ui(ui, |ui| {
-            let r = ui.selectable_label(shown.is_none(), "none");
+            let r = ui.selectable_label(shown.is_none() && s.map.is_none(), "none");
             w.add("view none", ui, &r);
             if r.clicked() {
                 out.push(Action::Dump(None));
+                out.push(Action::MapLayer(None));
+            }
+            for i in 0..s.maps {
+                let name = format!("shadow map {i}");
+                let r = ui.selectable_label(s.map.is_some_and(|m| m.0 == i), &name);
+                w.add(format!("view {name}"), ui, &r);
+                if r.clicked() {
+                    out.push(Action::MapLayer(Some(i)));
+                }
             }
             for (i, name) in s.dumps.iter().enumerate() {
                 let r = ui.selectable_label(shown == Some(i), name);
@@ -444,7 +407,7 @@ fn views(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widge
                     out.push(Action::Dump(Some(i)));
                 }
             }
-            if s.dumps.is_empty() {
+            if s.dumps.is_empty() && s.maps == 0 {
                 // Asking once draws the frame with the technique's images kept.
                 let r = ui.selectable_label(false, "(look for images)");
                 w.add("view look", ui, &r);
@@ -455,6 +418,11 @@ fn views(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widge
         });
     w.add("technique view", ui, &r.response);
     ui.label("technique view");
+    if let Some((_, id)) = s.map {
+        let side = ui.available_width().min(256.0);
+        let r = ui.image((id, egui::vec2(side, side)));
+        w.add("shadow map picture", ui, &r);
+    }
     if let Some((_, id, [iw, ih])) = s.dump {
         let scale = (ui.available_width() / iw).min(1.0);
         ui.image((id, egui::vec2(iw * scale, ih * scale)));

@@ -199,6 +199,17 @@ impl Screen {
         );
     }
 
+    /// egui's texture for `texture` (a technique's map in the panel).
+    pub fn native_texture(&mut self, texture: &wgpu::TextureView) -> egui::TextureId {
+        self.renderer
+            .register_native_texture(&self.gpu.device, texture, wgpu::FilterMode::Nearest)
+    }
+
+    /// Forgets egui's texture `id`.
+    pub fn free_texture(&mut self, id: egui::TextureId) {
+        self.renderer.free_texture(&id);
+    }
+
     /// Draws the view (with the error overlay when `error_on`) and egui's `painted` into
     /// the window; with `capture`, draws the same into a texture and returns it read back
     /// (`None` when the window could not be drawn this time: the caller asks again).

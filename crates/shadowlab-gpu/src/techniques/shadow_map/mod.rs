@@ -114,6 +114,8 @@ pub struct GpuShadowMap {
     name: &'static str,
     cpu: ShadowMap,
     resident: Option<Resident>,
+    /// The last frame's maps, for a viewer to show.
+    last_maps: Option<wgpu::Texture>,
 }
 
 impl GpuShadowMap {
@@ -123,6 +125,7 @@ impl GpuShadowMap {
             name: SM,
             cpu: ShadowMap::standard(),
             resident: None,
+            last_maps: None,
         }
     }
 
@@ -132,6 +135,7 @@ impl GpuShadowMap {
             name: PCF,
             cpu: ShadowMap::pcf(),
             resident: None,
+            last_maps: None,
         }
     }
 
@@ -216,6 +220,10 @@ impl OnDevice for GpuShadowMap {
         let visibility = self.shadow_term(frame, view, &mut stats)?;
         Ok(DeviceShadows { visibility, stats })
     }
+
+    fn depth_maps(&self) -> Option<&wgpu::Texture> {
+        self.last_maps.as_ref()
+    }
 }
 
 impl GpuShadowMap {
@@ -261,6 +269,7 @@ impl GpuShadowMap {
         for (stage, ms) in timer.read(&gpu)? {
             stats.count(&format!("gpu_{stage}_ms"), ms);
         }
+        self.last_maps = Some(map);
         stats.memory_bytes = u64::from(res_side).pow(2) * u64::from(layers) * 4;
         stats.count(
             "map_texels",
