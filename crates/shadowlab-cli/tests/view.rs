@@ -3,7 +3,8 @@
 //! turns and flies the camera, drags the light, raises a parameter and turns the overlays
 //! on; each screenshot's view must equal, outside the overlays' rectangles, the image of
 //! the `render` command line the viewer wrote for it, and the error it shows must be
-//! `compare`'s for that view. The panel is driven as a pointer drives it (`ui_view.rs`).
+//! `compare`'s for that view. The panel is driven as a pointer drives it: by a script's
+//! clicks on its widgets by label, and by a real click through xdotool.
 
 mod support;
 
