@@ -19,6 +19,9 @@
 # - asm-room/: `compare` of room's walkthrough over 8 frames with gpu:asm, a 2048²
 #   gpu:sm and the CPU asm (goal: gpu:asm's last frame's mismatch at most 1/10 of
 #   gpu:sm's within a 16 MiB pool; results[].frames[] in asm-room/metrics.json);
+# - viewer-{sm,cascaded,afsm}.txt: `view --benchmark-frames 120` at 1920x1080 on chessboard with
+#   gpu:sm, gpu:cascaded and gpu:afsm, the error overlay on (goal: 60 frames a second), under Xvfb when
+#   the machine has it (a window needs a display; skipped otherwise);
 # - gpu-bench.log: everything printed.
 #
 #   scripts/gpu-bench.sh BINARY OUTDIR
@@ -98,6 +101,16 @@ run "${hair[@]}" --technique gpu:afsm --param samples=32 --stats "$out/hairball-
 run "${hair[@]}" --technique gpu:raytrace --stats "$out/hairball-raytrace.json"
 run compare --force --scene room --techniques gpu:asm,gpu:sm,asm \
     --param gpu:sm.resolution=2048 --frames 8 --out "$out/asm-room"
+if command -v xvfb-run >/dev/null 2>&1; then
+    viewer=(view --scene chessboard --width 1920 --height 1080 --error-overlay --benchmark-frames 120)
+    for t in sm cascaded afsm; do
+        say "running: xvfb-run $binary ${viewer[*]} --technique gpu:$t"
+        timeout "$(left)" xvfb-run -a -s "-screen 0 2400x1200x24" \
+            "$binary" "${viewer[@]}" --technique "gpu:$t" 2>&1 | tee "$out/viewer-$t.txt" >>"$log"
+    done
+else
+    say "no xvfb-run here: the viewer's benchmark is skipped"
+fi
 set -e
 say "bench gpu's exit status $status"
 exit "$status"

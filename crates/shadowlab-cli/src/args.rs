@@ -261,6 +261,10 @@ pub struct ViewArgs {
     /// Render this many frames, each from scratch, print the time per stage and quit.
     #[arg(long = "benchmark-frames", value_name = "N")]
     pub benchmark_frames: Option<usize>,
+    /// Start with the error overlay on (the error against the reference, measured on the
+    /// GPU for techniques that stay on the device; benchmarks then time it too).
+    #[arg(long = "error-overlay")]
+    pub error_overlay: bool,
     /// The folder the screenshot key (P) writes into.
     #[arg(long = "screenshot-dir", value_name = "DIR", default_value = ".")]
     pub screenshot_dir: PathBuf,

@@ -101,6 +101,10 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
     /// The adapter it came from.
     pub adapter: AdapterRecord,
+    /// The instance and adapter, for a window's surface on the same device (the viewer).
+    pub instance: wgpu::Instance,
+    /// The adapter itself (its surface capabilities).
+    pub handle: wgpu::Adapter,
     /// The limits in force: the adapter's own.
     pub limits: wgpu::Limits,
     /// True when stages can be timed with timestamp queries.
@@ -204,6 +208,8 @@ impl Gpu {
             device,
             queue,
             adapter: record,
+            instance,
+            handle: adapter,
             limits,
             timestamps,
             faults,

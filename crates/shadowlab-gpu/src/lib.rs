@@ -22,6 +22,7 @@
 //! twin.rs                   a GPU technique's parameters are its CPU twin's
 //! compute.rs                pipelines and bind groups by binding number, read-back to RGB
 //! upload.rs                 scene (per revision), BVH, view samples -> GPU buffers
+//! resident.rs               the shadow term left on the device (OnDevice), for the viewer
 //! camera_pass/              the GPU G-buffer (benchmarks, the viewer): gbuffer.wgsl
 //! shader.rs                 the include step composing shaders/common/*.wgsl into stages
 //! shaders/common/*.wgsl     written once: watertight test, ray offset, light, alpha masks
@@ -54,6 +55,7 @@
 pub mod camera_pass;
 pub mod compute;
 pub mod device;
+pub mod resident;
 pub mod shader;
 pub mod techniques;
 pub mod transfer;

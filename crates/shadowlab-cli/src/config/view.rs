@@ -29,6 +29,8 @@ pub struct ViewConfig {
     pub script: Option<PathBuf>,
     /// Frames to time, then quit.
     pub benchmark_frames: Option<usize>,
+    /// Start with the error overlay on.
+    pub error_overlay: bool,
     /// Where the screenshot key writes.
     pub screenshot_dir: PathBuf,
     /// Whether a script's screenshots may replace files.
@@ -71,6 +73,7 @@ impl ViewConfig {
             scene_args,
             script: a.script.clone(),
             benchmark_frames: a.benchmark_frames,
+            error_overlay: a.error_overlay,
             screenshot_dir: a.screenshot_dir.clone(),
             force: a.force,
         })

@@ -4,11 +4,11 @@
 //! depth stage), the comparison sampler of PCF, and the look-up's dispatch over the camera
 //! pass's samples with its shadow terms read back and its times counted.
 
-use crate::compute::{pipeline, render_pipeline, to_rgb};
+use crate::compute::{pipeline, render_pipeline};
 use crate::device::{shared, Gpu};
 use crate::shader::{Stage, ALPHA_MASK, TRIANGLES};
-use crate::transfer::{grid, output, read_back, storage, uniform, Timer};
-use crate::upload::{view_buffer, SceneBuffers, SceneKey};
+use crate::transfer::{grid, output, storage, uniform, Timer};
+use crate::upload::{SceneBuffers, SceneKey};
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::{Error, Result};
 use shadowlab::light::LightView;
@@ -261,20 +261,21 @@ pub(crate) fn lookup_grid(gpu: &Gpu, frame: &Frame) -> (u32, u32, (u32, u32)) {
 }
 
 /// Runs `stage`'s `main` over the frame's pixels with `resources` at bindings 0, 1, …
-/// (the uploaded view samples and the output buffer appended last but one and last),
-/// then reads the shadow terms back and counts the timed stages and the device.
+/// (the uploaded view samples `view` and the output buffer appended last but one and
+/// last), and counts the timed stages and the device: the shadow terms stay on the device.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn look_up(
     ms: &MapScene,
     name: &str,
     stage: &Stage,
     resources: &[wgpu::BindingResource],
     frame: &Frame,
+    view: &wgpu::Buffer,
     timer: &mut Timer,
     stats: &mut Stats,
-) -> Result<Vec<Vec3>> {
+) -> Result<wgpu::Buffer> {
     let gpu = &ms.gpu;
     let n = frame.view.triangle.len() as u32;
-    let view = stats.stage("upload_view", || view_buffer(gpu, frame.view))?;
     let out = output(gpu, "the shadow terms", u64::from(n) * 12)?;
     let (_, _, (gx, gy)) = lookup_grid(gpu, frame);
     let lookup = gpu.stage(name, "pipeline", || pipeline(gpu, stage, "main"))?;
@@ -315,22 +316,19 @@ pub(crate) fn look_up(
             gpu.queue.submit([encoder.finish()]);
         })
     })?;
-    let raw = stats.stage("readback", || {
-        gpu.stage(name, "readback", || read_back(gpu, &out, u64::from(n) * 12))
-    })??;
     for (stage, ms) in timer.read(gpu)? {
         stats.count(&format!("gpu_{stage}_ms"), ms);
     }
     stats.count("hardware_raster", 1.0);
     stats.device = Some(gpu.adapter.label());
-    Ok(to_rgb(&raw))
+    Ok(out)
 }
 
-/// The shadow terms of a frame whose light reaches no receiver: dark where a surface is
-/// shown, lit where none is.
-pub(crate) fn unreached(frame: &Frame) -> Vec<Vec3> {
+/// The shadow terms of a frame whose light reaches no receiver, on the device: dark where
+/// a surface is shown, lit where none is.
+pub(crate) fn unreached(frame: &Frame) -> Result<wgpu::Buffer> {
     let view = frame.view;
-    (0..view.triangle.len())
+    let terms: Vec<Vec3> = (0..view.triangle.len())
         .map(|k| {
             if view.covered(k) {
                 Vec3::ZERO
@@ -338,5 +336,6 @@ pub(crate) fn unreached(frame: &Frame) -> Vec<Vec3> {
                 Vec3::ONE
             }
         })
-        .collect()
+        .collect();
+    Ok(crate::resident::upload_terms(&*shared()?, &terms))
 }

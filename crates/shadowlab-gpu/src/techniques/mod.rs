@@ -101,3 +101,19 @@ fn filtered(
 ) -> Box<dyn ShadowTechnique> {
     Box::new(GpuFiltered::new(name, twin, soft))
 }
+
+/// The GPU technique `name` with its on-device path ([`crate::resident::OnDevice`]: the
+/// shadow term left in a device buffer), when it has one.
+pub fn create_on_device(name: &str) -> Option<Box<dyn crate::resident::OnDevice>> {
+    Some(match name {
+        shadow_map::SM => Box::new(shadow_map::GpuShadowMap::standard()),
+        shadow_map::PCF => Box::new(shadow_map::GpuShadowMap::pcf()),
+        raytrace::NAME => Box::new(raytrace::GpuRayTrace::default()),
+        alias_free::NAME => Box::new(alias_free::GpuAliasFree::default()),
+        perspective::NAME => Box::new(perspective::GpuPsm::default()),
+        lispsm::NAME => Box::new(lispsm::GpuLispsm::default()),
+        cascaded::NAME => Box::new(cascaded::GpuCascaded::default()),
+        pcss::NAME => Box::new(pcss::GpuPcss::default()),
+        _ => return None,
+    })
+}

@@ -1,29 +1,40 @@
-//! The window and its events: what a person's keys and mouse do, what a script's steps do,
-//! when a frame is drawn, and how it reaches the screen (a CPU framebuffer, `softbuffer`).
+//! The window and its frames: each frame takes the driver's input (a person's keys and
+//! mouse, a script's steps, a benchmark's turn), runs the panel (egui), applies what was
+//! done there, draws the view when it changed, measures it against the reference, and
+//! shows view, error overlay and panel on the window's surface (`window`).
 
 use super::frame::{self, Drawn};
-use super::input::{Drag, Key};
-use super::overlay::{self, Inset, Overlays, Rect};
+use super::gpu_shade::{GpuShading, OnDeviceFrame};
+use super::input::Drag;
+use super::map_view::MapView;
 use super::reference::{self, Background, Traced};
 use super::screenshot::{self, ErrorFigures};
-use super::script::Step;
-use super::session::Session;
+use super::session::{Session, Technique};
+use super::ui::{self, Action, Fields, Widgets};
 use super::window::Screen;
-use super::Steps;
-use anyhow::{anyhow, Result};
+use super::{panel, Steps};
+use anyhow::Result;
 use shadowlab::compare::{compare, Metrics};
-use shadowlab::picture::RgbImage;
 use shadowlab::shade;
+use shadowlab_gpu::device::Gpu;
+use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalPosition;
-use winit::event::{ElementState, WindowEvent};
+use winit::event::WindowEvent;
 use winit::event_loop::ActiveEventLoop;
 use winit::window::WindowId;
 
-/// The stage name of laying the overlays and showing the image.
-pub const PRESENT: &str = "overlays, present";
+/// The stage name of running the panel and showing the frame.
+pub const PRESENT: &str = "panel, present";
+
+/// The stage name of putting the view and the error overlay into the window's textures.
+pub const UPLOAD: &str = "view to the window";
+
+/// The stage name of measuring the error on the device.
+pub const ERROR_STAGE: &str = "error vs gpu:raytrace";
 
 /// The worker's message: a reference is ready.
 #[derive(Clone, Copy, Debug)]
@@ -44,57 +55,78 @@ pub enum Driver {
     },
 }
 
-/// The error against the reference of the frame shown.
-struct ErrorView {
-    image: RgbImage,
-    figures: ErrorFigures,
-}
-
 /// The application: the session, its window and what was drawn.
 pub struct App<'a> {
-    session: Session<'a>,
-    background: &'a Background,
-    driver: Driver,
-    screenshot_dir: PathBuf,
-    window: Option<Screen>,
-    drawn: Option<Drawn>,
-    composed: Option<(RgbImage, Vec<Rect>)>,
-    traced: Option<Traced>,
-    requested: Option<reference::Key>,
-    error: Option<ErrorView>,
-    mouse: (Option<Drag>, Option<PhysicalPosition<f64>>),
-    shift: bool,
-    frame_ms: f64,
-    present_ms: f64,
-    frames: u64,
-    failure: Option<anyhow::Error>,
+    pub(super) session: Session<'a>,
+    pub(super) background: &'a Background,
+    pub(super) driver: Driver,
+    pub(super) screenshot_dir: PathBuf,
+    pub(super) gpu: Arc<Gpu>,
+    pub(super) window: Option<Screen>,
+    pub(super) drawn: Option<Drawn>,
+    pub(super) traced: Option<Traced>,
+    pub(super) requested: Option<reference::Key>,
+    pub(super) error: Option<ErrorFigures>,
+    pub(super) mouse: (Option<Drag>, Option<PhysicalPosition<f64>>),
+    pub(super) shift: bool,
+    pub(super) history: VecDeque<Vec<(String, f64)>>,
+    pub(super) failure: Option<anyhow::Error>,
+    pub(super) fields: Fields,
+    pub(super) widgets: Widgets,
+    pub(super) injected: Vec<egui::Event>,
+    pub(super) shot: Option<PathBuf>,
+    pub(super) shading: Option<GpuShading>,
+    pub(super) on_device: Option<OnDeviceFrame>,
+    pub(super) measure_ms: f64,
+    pub(super) upload_ms: f64,
+    pub(super) map_layers: u32,
+    pub(super) map_view: Option<MapView>,
+    pub(super) click_waits: usize,
+    pub(super) dump: Option<(usize, egui::TextureHandle, [f32; 2])>,
+    pub(super) clipboard: Option<arboard::Clipboard>,
+    pub(super) cpu_names: Vec<String>,
+    pub(super) gpu_names: Vec<String>,
 }
 
 impl<'a> App<'a> {
-    /// An application not yet shown.
+    /// An application not yet shown, drawing on `gpu`.
     pub fn new(
         session: Session<'a>,
         background: &'a Background,
         driver: Driver,
         screenshot_dir: &Path,
+        gpu: Arc<Gpu>,
     ) -> Self {
         App {
             session,
             background,
             driver,
             screenshot_dir: screenshot_dir.to_path_buf(),
+            gpu,
             window: None,
             drawn: None,
-            composed: None,
             traced: None,
             requested: None,
             error: None,
             mouse: (None, None),
             shift: false,
-            frame_ms: 0.0,
-            present_ms: 0.0,
-            frames: 0,
+            history: VecDeque::new(),
             failure: None,
+            fields: Fields::default(),
+            widgets: Widgets::default(),
+            injected: Vec::new(),
+            shot: None,
+            shading: None,
+            on_device: None,
+            measure_ms: 0.0,
+            upload_ms: 0.0,
+            map_layers: 0,
+            map_view: None,
+            click_waits: 0,
+            dump: None,
+            clipboard: None,
+            cpu_names: panel::cpu_names(),
+            gpu_names: panel::gpu_names(),
         }
     }
 
@@ -105,138 +137,24 @@ impl<'a> App<'a> {
         }
         if let Driver::Benchmark { frames, .. } = &self.driver {
             println!("{}", super::benchmark::summary(&self.session.name, frames));
+            println!("adapter: {}", self.gpu.adapter.label());
         }
         Ok(())
     }
 
-    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+    pub(super) fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
         self.failure.get_or_insert(e);
         event_loop.exit();
     }
 
-    /// A person's key or button, unless a script or benchmark drives the window.
-    fn person_input(&mut self, event: &WindowEvent) {
-        if !matches!(self.driver, Driver::Person) {
-            return;
-        }
-        match event {
-            WindowEvent::ModifiersChanged(m) => self.shift = m.state().shift_key(),
-            // Keys released while the window had no keyboard never say so.
-            WindowEvent::Focused(false) => {
-                self.session.held.clear();
-                self.mouse.0 = None;
-            }
-            WindowEvent::KeyboardInput { event, .. } => {
-                let Some(k) = Key::from_winit(&event.logical_key, self.shift) else {
-                    return;
-                };
-                match (event.state, k) {
-                    (ElementState::Released, Key::Move(m)) => self.session.release(m),
-                    (ElementState::Pressed, k) if !event.repeat => self.session.press(k),
-                    _ => {}
-                }
-            }
-            WindowEvent::MouseInput { state, button, .. } => {
-                self.mouse.0 = match state {
-                    ElementState::Pressed => Drag::from_winit(*button),
-                    ElementState::Released => None,
-                };
-            }
-            WindowEvent::CursorMoved { position, .. } => {
-                if let (Some(d), Some(last)) = (self.mouse.0, self.mouse.1) {
-                    let (dx, dy) = (position.x - last.x, position.y - last.y);
-                    self.session.drag(d, dx as f32, dy as f32);
-                }
-                self.mouse.1 = Some(*position);
-            }
-            _ => return,
-        }
-        if let Some(w) = &self.window {
-            w.request_redraw();
-        }
+    pub(super) fn needs_frame(&self) -> bool {
+        self.session.dirty || self.session.stale || self.drawn.is_none()
     }
 
-    /// Plays the script's steps up to the next that needs a frame; false while it waits
-    /// for the reference.
-    fn play(&mut self, event_loop: &ActiveEventLoop) -> bool {
-        loop {
-            let (needs_frame, measured) = (self.needs_frame(), self.error.is_some());
-            let Driver::Script(steps) = &mut self.driver else {
-                return true;
-            };
-            let Some(step) = steps.front_mut() else {
-                event_loop.exit();
-                return false;
-            };
-            match step {
-                Step::Key(k) => {
-                    let k = *k;
-                    steps.pop_front();
-                    self.session.press(k);
-                    if let Key::Move(m) = k {
-                        // A press and release: one frame's step.
-                        self.session.fly();
-                        self.session.release(m);
-                    }
-                }
-                Step::Drag(d, dx, dy) => {
-                    let (d, dx, dy) = (*d, *dx, *dy);
-                    steps.pop_front();
-                    self.session.drag(d, dx, dy);
-                }
-                Step::Hold(m, n) => {
-                    let m = *m;
-                    *n -= 1;
-                    if *n == 0 {
-                        steps.pop_front();
-                    }
-                    self.session.press(Key::Move(m));
-                    self.session.fly();
-                    self.session.release(m);
-                    return true;
-                }
-                Step::Frames(n) => {
-                    *n -= 1;
-                    if *n == 0 {
-                        steps.pop_front();
-                    }
-                    return true;
-                }
-                Step::WaitReference => {
-                    self.session.show.error = true;
-                    self.session.show.overlays = true;
-                    if needs_frame || !measured {
-                        // Drawn first; then woken when the reference is there.
-                        return needs_frame;
-                    }
-                    steps.pop_front();
-                    self.session.stale = true;
-                    return true;
-                }
-                Step::Screenshot(p) => {
-                    if needs_frame {
-                        return true;
-                    }
-                    let p = p.clone();
-                    steps.pop_front();
-                    if let Err(e) = self.screenshot(&p) {
-                        self.fail(event_loop, e);
-                        return false;
-                    }
-                }
-            }
-        }
-    }
-
-    fn needs_frame(&self) -> bool {
-        self.session.dirty || self.session.stale || self.composed.is_none()
-    }
-
-    /// One frame: the driver's input, a new drawing when the view changed (or a
-    /// progressive technique refines), the overlays, the screen. Returns whether another
-    /// frame should follow at once.
+    /// One frame: the driver's input, the panel and its actions, a new drawing when the
+    /// view changed (or a progressive technique refines), the error, the screen. Returns
+    /// whether another frame should follow at once.
     fn frame(&mut self, event_loop: &ActiveEventLoop) -> Result<bool> {
-        let t0 = Instant::now();
         let mut more = match &mut self.driver {
             Driver::Person => {
                 self.session.fly();
@@ -250,6 +168,16 @@ impl<'a> App<'a> {
                 true
             }
         };
+        let t_panel = Instant::now();
+        let (actions, painted, egui_again) = self.run_panel();
+        for a in actions {
+            match panel::apply(&mut self.session, a) {
+                Some(Action::Screenshot) => self.session.screenshot = true,
+                Some(Action::CopyCommand) => self.copy_command(),
+                _ => {}
+            }
+        }
+        let panel_ms = frame::ms(t_panel);
         let refine = self.session.technique.converged() == Some(false);
         let drew = self.session.dirty || refine || self.drawn.is_none();
         if drew {
@@ -259,26 +187,35 @@ impl<'a> App<'a> {
         self.update_error();
         // A script waiting for the reference goes on once it is measured.
         more |= !measured && self.error.is_some();
-        let t1 = Instant::now();
-        if self.session.stale || self.composed.is_none() || self.session.show.overlays {
-            self.compose();
-        }
-        self.present()?;
-        self.present_ms = frame::ms(t1);
-        if drew {
-            self.frame_ms = frame::ms(t0);
-        }
-        self.frames += 1;
         if self.session.screenshot {
+            // The screenshot key: this frame, as the keys before it left it.
             self.session.screenshot = false;
             self.key_screenshot();
         }
-        if let Driver::Benchmark { left, frames } = &mut self.driver {
-            if let Some(d) = &self.drawn {
-                let mut stages = d.stages_ms.clone();
-                stages.push((PRESENT.to_string(), self.present_ms));
-                frames.push(stages);
+        let t_present = Instant::now();
+        let shot = self.shot.take();
+        let capture = shot.is_some();
+        let show = &self.session.show;
+        let error_on = show.overlays && show.error && self.error.is_some();
+        let shown = match &mut self.window {
+            Some(w) => w.present(painted, error_on, capture)?,
+            None => None,
+        };
+        self.session.stale = false;
+        match (shot, shown) {
+            (Some(p), Some(img)) => self.screenshot(&p, &img)?,
+            // Not drawn this time: the next frame takes it.
+            (Some(p), None) => {
+                self.shot = Some(p);
+                more = true;
             }
+            _ => {}
+        }
+        let present_ms = frame::ms(t_present);
+        if drew {
+            self.record(panel_ms + present_ms);
+        }
+        if let Driver::Benchmark { left, .. } = &self.driver {
             if *left == 0 {
                 event_loop.exit();
                 more = false;
@@ -289,30 +226,65 @@ impl<'a> App<'a> {
             more = false;
         }
         if matches!(self.driver, Driver::Person) {
-            more = !self.session.held.is_empty() || refine;
+            more = !self.session.held.is_empty() || refine || egui_again || self.shot.is_some();
         }
         Ok(more)
     }
 
-    /// Draws the view anew.
+    /// Records a drawn frame's stages (the panel's and the present's time, the view's and
+    /// error's upload, and the GPU's own stage times apart) for the plot and the benchmark.
+    fn record(&mut self, present_ms: f64) {
+        let Some(d) = &self.drawn else {
+            return;
+        };
+        let mut stages = d.stages_ms.clone();
+        if d.image.is_some() {
+            stages.push((UPLOAD.to_string(), self.upload_ms));
+        }
+        stages.push((PRESENT.to_string(), present_ms));
+        if self.measure_ms > 0.0 {
+            stages.push((ERROR_STAGE.to_string(), self.measure_ms));
+        }
+        let gpu: Vec<(String, f64)> = d
+            .counters
+            .iter()
+            .filter_map(|(k, v)| {
+                let stage = k.strip_prefix("gpu_")?.strip_suffix("_ms")?;
+                Some((format!("{}{stage}", super::benchmark::GPU_PREFIX), *v))
+            })
+            .collect();
+        self.history.push_back(stages.clone());
+        while self.history.len() > ui::HISTORY {
+            self.history.pop_front();
+        }
+        if let Driver::Benchmark { frames, .. } = &mut self.driver {
+            frames.push(stages.into_iter().chain(gpu).collect());
+        }
+    }
+
+    pub(super) fn render_args(&self, shot: &Path) -> Vec<String> {
+        super::reproduce::render_args(&self.session.state(), &screenshot::render_output(shot))
+    }
+
+    /// Draws the view anew and uploads it.
     fn draw(&mut self) -> Result<()> {
+        let drawn = self.draw_either();
         let s = &mut self.session;
-        let dump = s.show.overlays && s.show.dump.is_some();
-        let drawn = frame::draw(
-            s.scene,
-            &s.camera,
-            &s.light,
-            s.scene_args.layers,
-            s.technique.as_mut(),
-            dump,
-            self.drawn.take(),
-        );
         s.dirty = false;
         s.stale = true;
         match drawn {
-            Ok(d) => {
+            Ok((d, on_device)) => {
+                let t0 = Instant::now();
+                if let (Some(w), Some(img)) = (&self.window, &d.image) {
+                    w.upload(&w.textures.view, img, |_| 255);
+                }
+                self.upload_ms = frame::ms(t0);
                 self.drawn = Some(d);
+                self.on_device = on_device;
                 self.error = None;
+                self.measure_ms = 0.0;
+                self.show_dump();
+                self.show_map();
                 Ok(())
             }
             Err(e) if matches!(self.driver, Driver::Person) => {
@@ -323,13 +295,61 @@ impl<'a> App<'a> {
         }
     }
 
+    /// Whether the frame is drawn on the device: a technique that stays there, without
+    /// its own images or the layers behind semi-transparent surfaces (drawn on the CPU).
+    pub(super) fn on_device_path(&self) -> bool {
+        let s = &self.session;
+        matches!(s.technique, Technique::Device(_))
+            && !(s.show.overlays && s.show.dump.is_some())
+            && !s.scene_args.layers
+    }
+
+    /// The frame drawn on the device or, for every other technique, as `render` draws it.
+    fn draw_either(&mut self) -> Result<(Drawn, Option<OnDeviceFrame>)> {
+        let on_device = self.on_device_path();
+        let s = &mut self.session;
+        let previous = self.drawn.take();
+        match (&mut s.technique, &self.window, on_device) {
+            (Technique::Device(t), Some(w), true) => {
+                if self.shading.is_none() {
+                    self.shading = Some(GpuShading::new(self.gpu.clone(), s.scene)?);
+                }
+                let shading = self.shading.as_ref().expect("made above");
+                let target = &w.textures.view;
+                let (d, on) =
+                    shading.draw(s.scene, &s.camera, &s.light, t.as_mut(), previous, target)?;
+                Ok((d, Some(on)))
+            }
+            _ => {
+                let dump = s.show.overlays && s.show.dump.is_some();
+                let d = frame::draw(
+                    s.scene,
+                    &s.camera,
+                    &s.light,
+                    s.scene_args.layers,
+                    &mut *s.technique,
+                    dump,
+                    previous,
+                )?;
+                Ok((d, None))
+            }
+        }
+    }
+
     /// Asks the worker for the reference of the view shown, and measures the frame
-    /// against it once it is there.
+    /// against it once it is there; the error image goes to the overlay's texture.
     fn update_error(&mut self) {
         if let Some(t) = self.background.take() {
             self.traced = Some(t);
         }
+        if self.on_device.is_some() {
+            self.measure_on_device();
+            return;
+        }
         let (Some(d), true) = (&self.drawn, self.session.show.error) else {
+            return;
+        };
+        let Some(shadows) = &d.shadows else {
             return;
         };
         let key = reference::Key {
@@ -341,11 +361,17 @@ impl<'a> App<'a> {
                 if self.error.is_some() {
                     return;
                 }
-                let vis = &d.shadows.visibility;
-                self.error = Some(ErrorView {
-                    image: shade::error_image(&d.view, vis, &t.visibility),
-                    figures: figures(&compare(&d.view, vis, &t.visibility), key.spp),
-                });
+                let vis = &shadows.visibility;
+                let img = shade::error_image(&d.view, vis, &t.visibility);
+                if let Some(w) = &self.window {
+                    // Where the technique agrees with the reference (black) or nothing is
+                    // covered (grey), the overlay is clear.
+                    w.upload(&w.textures.error, &img, |p| match p {
+                        [0, 0, 0] | [40, 40, 40] => 0,
+                        _ => 255,
+                    });
+                }
+                self.error = Some(figures(&compare(&d.view, vis, &t.visibility), key.spp));
                 self.session.stale = true;
             }
             _ if self.requested != Some(key) => {
@@ -356,94 +382,6 @@ impl<'a> App<'a> {
             _ => {}
         }
     }
-
-    /// Lays the overlays over the drawn view.
-    fn compose(&mut self) {
-        let Some(d) = &self.drawn else {
-            return;
-        };
-        if let Some(i) = self.session.show.dump {
-            if i >= d.dumps.len() {
-                // Past the last image: the overlay goes off.
-                self.session.show.dump = None;
-                if d.dumps.is_empty() {
-                    self.session.status = format!("{} shows no images", self.session.name);
-                }
-            }
-        }
-        let s = &self.session;
-        let mut o = Overlays::default();
-        if s.show.overlays {
-            o.panel =
-                super::panel::lines(s, d, (self.frame_ms, self.present_ms), self.error_line());
-            if s.show.error {
-                o.error = self.error.as_ref().map(|e| Inset {
-                    image: &e.image,
-                    caption: format!("error vs {} spp reference", e.figures.reference_spp),
-                });
-            }
-            if let Some(i) = s.show.dump {
-                o.dump = d.dumps.get(i).map(|(name, img)| Inset {
-                    image: img,
-                    caption: name.clone(),
-                });
-            }
-        }
-        self.composed = Some(overlay::compose(&d.image, &o));
-        self.session.stale = false;
-    }
-
-    fn error_line(&self) -> Option<String> {
-        if !self.session.show.error {
-            return None;
-        }
-        Some(match &self.error {
-            Some(e) => format!(
-                "mismatch {:.3}%  mean abs error {:.4}",
-                e.figures.mismatch_rate * 100.0,
-                e.figures.mean_abs_error
-            ),
-            None => "error: tracing the reference...".to_string(),
-        })
-    }
-
-    /// Shows the composed image.
-    fn present(&mut self) -> Result<()> {
-        match (&mut self.window, &self.composed) {
-            (Some(w), Some((img, _))) => w.present(img),
-            _ => Ok(()),
-        }
-    }
-
-    /// Writes the window as it is now to `path`, with its command line.
-    fn screenshot(&self, path: &Path) -> Result<()> {
-        let Some((img, rects)) = &self.composed else {
-            return Ok(());
-        };
-        let args =
-            super::reproduce::render_args(&self.session.state(), &screenshot::render_output(path));
-        let shown = self.session.show.overlays && self.session.show.error;
-        let error = self.error.as_ref().filter(|_| shown).map(|e| &e.figures);
-        let line = screenshot::write(path, img, rects, error, &args)?;
-        println!("{}: {line}", path.display());
-        Ok(())
-    }
-
-    /// The screenshot key: the next free numbered file; a failure goes to the panel.
-    fn key_screenshot(&mut self) {
-        let result = match screenshot::next_free(&self.screenshot_dir) {
-            Some(p) => self.screenshot(&p),
-            None => Err(anyhow!(
-                "{} holds {} screenshots already",
-                self.screenshot_dir.display(),
-                screenshot::MAX_NUMBERED
-            )),
-        };
-        if let Err(e) = result {
-            self.session.status = crate::failure::sentence(&e);
-            self.session.stale = true;
-        }
-    }
 }
 
 impl ApplicationHandler<ReferenceReady> for App<'_> {
@@ -451,7 +389,8 @@ impl ApplicationHandler<ReferenceReady> for App<'_> {
         if self.window.is_none() {
             let s = &self.session;
             let title = format!("shadowlab view — {}", s.scene.name);
-            match Screen::open(event_loop, &title, s.camera.width, s.camera.height) {
+            let (w, h) = (s.camera.width, s.camera.height);
+            match Screen::open(event_loop, self.gpu.clone(), &title, w, h) {
                 Ok(w) => self.window = Some(w),
                 Err(e) => self.fail(event_loop, e),
             }
@@ -476,8 +415,40 @@ impl ApplicationHandler<ReferenceReady> for App<'_> {
                 Ok(false) => {}
                 Err(e) => self.fail(event_loop, e),
             },
-            e => self.person_input(&e),
+            e => self.window_input(&e),
         }
+    }
+}
+
+impl App<'_> {
+    /// The error of a frame drawn on the device, against gpu:raytrace traced there; once
+    /// for each frame drawn.
+    fn measure_on_device(&mut self) {
+        let s = &self.session;
+        let (Some(d), Some(on), Some(shading), Some(w), true, None) = (
+            &mut self.drawn,
+            &self.on_device,
+            &mut self.shading,
+            &self.window,
+            s.show.error,
+            &self.error,
+        ) else {
+            return;
+        };
+        let t0 = Instant::now();
+        let spp = reference::spp_for(&s.name);
+        match shading.measure(s.scene, &s.light, d, on, spp, &w.textures.error) {
+            Ok((f, times)) => {
+                self.error = Some(f);
+                d.counters.extend(times);
+            }
+            Err(e) => {
+                self.session.status = crate::failure::sentence(&e);
+                self.session.show.error = false;
+            }
+        }
+        self.measure_ms = frame::ms(t0);
+        self.session.stale = true;
     }
 }
 
@@ -488,4 +459,12 @@ fn figures(m: &Metrics, spp: u32) -> ErrorFigures {
         mean_abs_error: m.mean_abs_error,
         reference_spp: spp,
     }
+}
+
+/// The error of a missing widget, for scripts.
+pub fn no_widget(label: &str, w: &Widgets) -> anyhow::Error {
+    crate::failure::bad_input(format!(
+        "no widget labelled {label:?} in the panel; it shows {}",
+        w.labels().join(", ")
+    ))
 }

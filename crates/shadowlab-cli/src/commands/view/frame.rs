@@ -22,29 +22,30 @@ pub struct Drawn {
     pub view: ViewSamples,
     /// The surfaces behind semi-transparent ones, when shaded.
     pub layers: Option<ViewLayers>,
-    /// The technique's result.
-    pub shadows: Shadows,
-    /// The shaded image.
-    pub image: RgbImage,
+    /// The technique's result (`None` when it stayed on the device).
+    pub shadows: Option<Shadows>,
+    /// The shaded image (`None` when shaded on the device).
+    pub image: Option<RgbImage>,
     /// Milliseconds of each stage: the camera pass, the technique's own stages, shading.
     pub stages_ms: Vec<(String, f64)>,
     /// The technique's images, when asked for (grey ones as colour).
     pub dumps: Vec<(String, RgbImage)>,
+    /// The technique's counters (its GPU stage times `gpu_STAGE_ms` among them).
+    pub counters: std::collections::BTreeMap<String, f64>,
 }
 
-/// Draws the frame of `camera` and `light` with `technique`; `layers` shades the surfaces
-/// behind semi-transparent ones too, `dump` keeps the technique's images. The camera
-/// pass of `previous` is kept when its camera is the same (the light or the technique
-/// changed): it depends on nothing else.
-pub fn draw(
+/// The camera pass of a frame: the camera with its depth range fitted, the samples, the
+/// layers behind semi-transparent surfaces (with `layers`), and its stage time. The pass
+/// of `previous` is kept when its camera is the same; else it renders into its buffers.
+pub type CameraPass = (Camera, ViewSamples, Option<ViewLayers>, Vec<(String, f64)>);
+
+/// The camera pass of `camera` (see [`CameraPass`]).
+pub fn camera_pass(
     scene: &Scene,
     camera: &Camera,
-    light: &Light,
     layers: bool,
-    technique: &mut dyn ShadowTechnique,
-    dump: bool,
     previous: Option<Drawn>,
-) -> Result<Drawn> {
+) -> Result<CameraPass> {
     let mut camera = *camera;
     camera.fit_depth_range(&scene.bounds);
     camera.validate()?;
@@ -78,6 +79,24 @@ pub fn draw(
             (view, l)
         }
     };
+    Ok((camera, view, layer_samples, stages_ms))
+}
+
+/// Draws the frame of `camera` and `light` with `technique`; `layers` shades the surfaces
+/// behind semi-transparent ones too, `dump` keeps the technique's images. The camera
+/// pass of `previous` is kept when its camera is the same (the light or the technique
+/// changed): it depends on nothing else.
+pub fn draw(
+    scene: &Scene,
+    camera: &Camera,
+    light: &Light,
+    layers: bool,
+    technique: &mut dyn ShadowTechnique,
+    dump: bool,
+    previous: Option<Drawn>,
+) -> Result<Drawn> {
+    let (camera, view, layer_samples, mut stages_ms) =
+        camera_pass(scene, camera, layers, previous)?;
     let sink = DumpMemory::default();
     let mut frame = Frame::new(scene, &camera, light, &view);
     if let Some(l) = &layer_samples {
@@ -115,8 +134,9 @@ pub fn draw(
         camera,
         view,
         layers: layer_samples,
-        shadows,
-        image,
+        counters: shadows.stats.counters.clone(),
+        shadows: Some(shadows),
+        image: Some(image),
         stages_ms,
         dumps,
     })

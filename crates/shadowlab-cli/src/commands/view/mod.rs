@@ -2,25 +2,32 @@
 //! a script (`--script`) or a benchmark (`--benchmark-frames`).
 //!
 //! The flow: read the script (its errors are the user's, before any window), open the
-//! window (no display is the user's error too), start the background worker that traces
-//! the reference, then answer the window's events until asked to quit. Each frame plays
-//! the script's next steps or the person's input (`input`, `script`) into the session
-//! (`session`, `fly`), draws the view as `render` would (`frame`) when it changed, lays
-//! the overlays over it (`overlay`) and presents it; screenshots write the window and the
-//! `render` command line of the view (`screenshot`, `reproduce`).
+//! display and the GPU device (no display, or no adapter, is the user's error too), start
+//! the background worker that traces the reference, then answer the window's events until
+//! asked to quit. Each frame plays the script's next steps or the person's input
+//! (`input`, `script`, `play`) into the session (`session`, `fly`) and the panel (`ui`,
+//! `panel`), draws the view as `render` would (`frame`) when it changed, and shows it with
+//! the error overlay and the panel on the window's GPU surface (`window`, `blit.wgsl`);
+//! screenshots read that frame back and write it with the `render` command line of the
+//! view (`capture`, `screenshot`, `reproduce`).
 
 mod app;
 mod benchmark;
+mod capture;
 mod fly;
 mod frame;
+mod gpu_shade;
 mod input;
-mod overlay;
+mod map_view;
 mod panel;
+mod play;
 mod reference;
 mod reproduce;
 mod screenshot;
 mod script;
 mod session;
+mod timings;
+mod ui;
 mod window;
 
 use crate::config::ViewConfig;
@@ -50,8 +57,9 @@ pub fn run(cfg: ViewConfig) -> Result<()> {
     keep_freed_memory();
     let event_loop = open_display()?;
     event_loop.set_control_flow(ControlFlow::Wait);
+    let gpu = open_gpu()?;
     let proxy = event_loop.create_proxy();
-    let session = Session::new(
+    let mut session = Session::new(
         &cfg.setup.scene,
         &cfg.scene_args,
         cfg.setup.camera,
@@ -59,13 +67,14 @@ pub fn run(cfg: ViewConfig) -> Result<()> {
         &cfg.technique,
         cfg.params.clone(),
     )?;
+    session.show.error = cfg.error_overlay;
     let background = Background::default();
     std::thread::scope(|scope| {
         let worker = background.start(scope, &cfg.setup.scene, move || {
             // The window may be gone already; then nobody waits for the reference.
             let _ = proxy.send_event(ReferenceReady);
         });
-        let mut app = App::new(session, &background, driver, &cfg.screenshot_dir);
+        let mut app = App::new(session, &background, driver, &cfg.screenshot_dir, gpu);
         let ran = event_loop.run_app(&mut app);
         background.quit();
         let _ = worker.join();
@@ -96,6 +105,15 @@ fn open_display() -> Result<EventLoop<ReferenceReady>> {
                 "view cannot open a window on display {display:?} ({reason}); on a machine without one, run it under xvfb-run"
             ))
         })
+}
+
+/// The shared GPU device the window draws with, or the user's error when there is no
+/// adapter.
+fn open_gpu() -> Result<std::sync::Arc<shadowlab_gpu::device::Gpu>> {
+    shadowlab_gpu::device::shared().map_err(|e| match e {
+        shadowlab::error::Error::Internal(m) => anyhow::anyhow!("view cannot draw: {m}"),
+        e => bad_input(format!("view draws with the GPU and {e}")),
+    })
 }
 
 /// Frames allocate and free the same large buffers again and again (the camera pass, a

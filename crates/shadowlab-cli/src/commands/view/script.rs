@@ -8,9 +8,19 @@
 //!                       mouse button by DX, DY pixels
 //! frames N              let N frames pass (a progressive technique refines)
 //! wait-reference        show the error against the reference and wait until it is ready
-//! screenshot PATH       write the window as PATH (PNG) and PATH's .json: the overlays'
-//!                       rectangles and the `render` command line of the view
+//! screenshot PATH       write the window as PATH (PNG) and PATH's .json: the view's and
+//!                       the overlays' rectangles, the widgets', and the `render` command
+//!                       line of the view
+//! click LABEL           click the panel's widget LABEL where the last frame drew it: the
+//!                       pointer's press, release and a frame for what it opened
+//! type TEXT             into the widget with the keyboard: select all, TEXT, Enter
 //! ```
+//!
+//! Labels: `cpu technique` and `gpu technique` (the pickers; once open, each technique by
+//! its name), each parameter's key (its field) and `KEY slider`, `KEY=WORD` in an open
+//! choice, `directional` `point` `spot`, `light x` `light y` `light z`, `error overlay`,
+//! `technique view` (then `view NAME`, `view shadow map N`, `view none`), `screenshot`,
+//! `copy command line`.
 
 use super::input::{Drag, Key, Move};
 use crate::failure::bad_input;
@@ -43,6 +53,14 @@ pub enum Step {
     WaitReference,
     /// Write a screenshot.
     Screenshot(PathBuf),
+    /// Click the widget with this label.
+    Click(String),
+    /// Type this text into the widget that has the keyboard, then Enter.
+    Type(String),
+    /// The second frame of a click: the button released at (x, y).
+    Release(f32, f32),
+    /// A frame for what a click opened (a picker's list).
+    Settle,
 }
 
 /// Reads and checks the script at `path`; its screenshots may replace files only with
@@ -123,9 +141,13 @@ fn parse_line(words: &[&str], steps: &mut VecDeque<Step>) -> Result<()> {
         ["frames", n] => steps.push_back(Step::Frames(count(n)?)),
         ["wait-reference"] => steps.push_back(Step::WaitReference),
         ["screenshot", path] => steps.push_back(Step::Screenshot(PathBuf::from(path))),
+        ["click", label @ ..] if !label.is_empty() => {
+            steps.push_back(Step::Click(label.join(" ")));
+        }
+        ["type", text @ ..] if !text.is_empty() => steps.push_back(Step::Type(text.join(" "))),
         _ => {
             return Err(bad_input(
-                "not a step: key NAME [N], hold NAME FRAMES, drag left|right DX DY, frames N, wait-reference or screenshot PATH",
+                "not a step: key NAME [N], hold NAME FRAMES, drag left|right DX DY, frames N, wait-reference, screenshot PATH, click LABEL or type TEXT",
             ))
         }
     }
@@ -167,7 +189,7 @@ mod tests {
     #[test]
     fn every_step_parses_and_bad_lines_name_their_line() {
         let s = parse(
-            "# a session\nkey tab 2\nhold w 3\ndrag left 10 -4.5\nframes 2\nwait-reference\nscreenshot a.png # shot\n",
+            "# a session\nkey tab 2\nhold w 3\ndrag left 10 -4.5\nframes 2\nwait-reference\nscreenshot a.png # shot\nclick error overlay\ntype 256\n",
         )
         .unwrap();
         assert_eq!(
@@ -180,6 +202,8 @@ mod tests {
                 Step::Frames(2),
                 Step::WaitReference,
                 Step::Screenshot(PathBuf::from("a.png")),
+                Step::Click("error overlay".into()),
+                Step::Type("256".into()),
             ]
         );
         for bad in [
@@ -190,6 +214,8 @@ mod tests {
             "frames -1",
             "drag left nan 0",
             "jump",
+            "click",
+            "type",
         ] {
             let e = parse(&format!("frames 1\n{bad}\n")).unwrap_err();
             assert!(format!("{e:#}").contains("line 2"), "{bad}: {e:#}");

@@ -12,6 +12,7 @@ use shadowlab::camera::Camera;
 use shadowlab::light::Light;
 use shadowlab::scene::Scene;
 use shadowlab::techniques::{self, ParamRange, ShadowTechnique};
+use shadowlab_gpu::resident::OnDevice;
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Which overlays are on.
@@ -22,6 +23,48 @@ pub struct Show {
     pub error: bool,
     /// The technique's image shown, by its index among those it dumps.
     pub dump: Option<usize>,
+    /// The layer of the technique's depth maps shown (drawn on the device).
+    pub map: Option<u32>,
+}
+
+/// A technique, with its on-device path when it has one.
+pub enum Technique {
+    /// Any technique: its shadow term comes back to the CPU.
+    Any(Box<dyn ShadowTechnique>),
+    /// A GPU technique whose shadow term can stay on the device.
+    Device(Box<dyn OnDevice>),
+}
+
+impl std::ops::Deref for Technique {
+    type Target = dyn ShadowTechnique;
+    fn deref(&self) -> &Self::Target {
+        match self {
+            Technique::Any(t) => t.as_ref(),
+            Technique::Device(t) => t.as_ref(),
+        }
+    }
+}
+
+impl std::ops::DerefMut for Technique {
+    fn deref_mut(&mut self) -> &mut Self::Target {
+        match self {
+            Technique::Any(t) => t.as_mut(),
+            Technique::Device(t) => t.as_mut(),
+        }
+    }
+}
+
+/// The technique `name` with `params`: on the device where it can stay there.
+fn make(name: &str, params: &[(String, String)]) -> anyhow::Result<Technique> {
+    match shadowlab_gpu::techniques::create_on_device(name) {
+        Some(mut t) => {
+            for (k, v) in params {
+                t.set_param(k, v)?;
+            }
+            Ok(Technique::Device(t))
+        }
+        None => Ok(Technique::Any(make_technique(name, params)?)),
+    }
 }
 
 /// The state of the viewer.
@@ -37,7 +80,7 @@ pub struct Session<'a> {
     /// The technique's name as the command line spells it.
     pub name: String,
     /// The technique.
-    pub technique: Box<dyn ShadowTechnique>,
+    pub technique: Technique,
     /// The parameters the user set, per technique.
     params: BTreeMap<String, Vec<(String, String)>>,
     /// Changes whenever the camera or light moves.
@@ -68,7 +111,7 @@ impl<'a> Session<'a> {
         technique: &str,
         params: Vec<(String, String)>,
     ) -> anyhow::Result<Self> {
-        let t = make_technique(technique, &params)?;
+        let t = make(technique, &params)?;
         Ok(Session {
             scene,
             scene_args,
@@ -85,6 +128,7 @@ impl<'a> Session<'a> {
                 overlays: true,
                 error: false,
                 dump: None,
+                map: None,
             },
             status: String::new(),
             screenshot: false,
@@ -171,15 +215,48 @@ impl<'a> Session<'a> {
     fn switch(&mut self, by: usize) {
         let all = techniques::ALL;
         let at = all.iter().position(|n| *n == self.name).unwrap_or(0);
-        let name = all[(at + by) % all.len()];
+        self.set_technique(all[(at + by) % all.len()]);
+    }
+
+    /// Switches to the technique `name`, with the parameters the user set on it before.
+    pub fn set_technique(&mut self, name: &str) {
         let params = self.params.get(name).cloned().unwrap_or_default();
-        match make_technique(name, &params) {
+        match make(name, &params) {
             Ok(t) => {
                 self.technique = t;
                 self.name = name.to_string();
                 self.show.dump = None;
+                self.show.map = None;
                 self.dirty = true;
+                self.stale = true;
                 self.status.clear();
+            }
+            Err(e) => self.status = failure::sentence(&e),
+        }
+    }
+
+    /// Sets the current technique's parameter `key` to `text` (a refusal goes to the
+    /// panel's message).
+    pub fn set_param(&mut self, key: &str, text: &str) {
+        self.stale = true;
+        match self.technique.set_param(key, text) {
+            Ok(()) => {
+                let p = self.params.entry(self.name.clone()).or_default();
+                p.retain(|(k, _)| k != key);
+                p.push((key.to_string(), text.to_string()));
+                self.status.clear();
+                self.dirty = true;
+            }
+            Err(e) => self.status = failure::sentence(&e.into()),
+        }
+    }
+
+    /// Replaces the light by `l` as `render --light` reads it back.
+    pub fn set_light(&mut self, l: Light) {
+        match reproduce::as_rendered(&l) {
+            Ok(l) => {
+                self.light = l;
+                self.moved();
             }
             Err(e) => self.status = failure::sentence(&e),
         }
@@ -219,15 +296,6 @@ impl<'a> Session<'a> {
             }
             _ => return,
         };
-        match self.technique.set_param(key, &text) {
-            Ok(()) => {
-                let p = self.params.entry(self.name.clone()).or_default();
-                p.retain(|(k, _)| k != key);
-                p.push((key.to_string(), text));
-                self.status.clear();
-                self.dirty = true;
-            }
-            Err(e) => self.status = failure::sentence(&e.into()),
-        }
+        self.set_param(key, &text);
     }
 }

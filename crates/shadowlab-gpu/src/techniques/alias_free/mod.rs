@@ -86,6 +86,7 @@ mod samples;
 
 use crate::compute::to_rgb;
 use crate::device::{shared, Gpu};
+use crate::resident::{DeviceShadows, OnDevice};
 use crate::shader::{Common, Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, TRIANGLES, WATERTIGHT};
 use crate::transfer::storage;
 use crate::upload::{view_buffer, SceneBuffers, SceneKey};
@@ -311,16 +312,44 @@ impl ShadowTechnique for GpuAliasFree {
     }
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
-        frame.light.validate()?;
         let mut stats = Stats::default();
+        let o = self.frame(frame, None, &mut stats)?;
+        Ok(Shadows::of_frame(frame, to_rgb(&o.out), stats))
+    }
+}
+
+impl OnDevice for GpuAliasFree {
+    fn render_on_device(&mut self, frame: &Frame, view: &wgpu::Buffer) -> Result<DeviceShadows> {
+        let mut stats = Stats::default();
+        let o = self.frame(frame, Some(view), &mut stats)?;
+        let visibility = o
+            .out_buffer
+            .ok_or_else(|| Error::Internal(format!("{NAME}: the shadow terms left no buffer")))?;
+        Ok(DeviceShadows { visibility, stats })
+    }
+}
+
+impl GpuAliasFree {
+    /// One frame over the camera pass's samples (`view` when uploaded already: then the
+    /// shadow terms stay on the device).
+    fn frame(
+        &mut self,
+        frame: &Frame,
+        uploaded: Option<&wgpu::Buffer>,
+        stats: &mut Stats,
+    ) -> Result<run::Outcome> {
+        frame.light.validate()?;
         let (leaf, spp) = (self.leaf_size.clamp(1, MAX_LEAF_SIZE), self.samples);
-        let res = self.resident(frame, &mut stats)?;
+        let res = self.resident(frame, stats)?;
         let gpu = res.gpu.clone();
         let view = frame.view;
         let n_pixels = view.triangle.len() as u32;
         let planes = planes::planes(frame.light, frame.scene);
         let (samples, pixel_start, n_samples) = if spp <= 1 {
-            let v = stats.stage("upload_view", || view_buffer(&gpu, view))?;
+            let v = match uploaded {
+                Some(v) => v.clone(),
+                None => stats.stage("upload_view", || view_buffer(&gpu, view))?,
+            };
             (v, storage(&gpu, "no pixel runs", &[0; 4])?, n_pixels)
         } else {
             let sub = stats.stage("subpixel_hits", || samples::sub_samples(frame, spp))?;
@@ -359,9 +388,10 @@ impl ShadowTechnique for GpuAliasFree {
             n_tris,
             leaf,
             dumping: frame.dumping(),
+            on_device: uploaded.is_some(),
         };
-        let o = run(res, &setting, &input, &mut stats)?;
-        record(&mut stats, &o);
+        let o = run(res, &setting, &input, stats)?;
+        record(stats, &o);
         if let Some((starts, chunk_cell, culled)) = &o.grid {
             for (i, g) in dump::plane_grids(&o.planes, starts, chunk_cell, culled)
                 .iter()
@@ -375,7 +405,7 @@ impl ShadowTechnique for GpuAliasFree {
         }
         stats.memory_bytes = o.bytes + res.scene.bytes;
         stats.device = Some(gpu.adapter.label());
-        Ok(Shadows::of_frame(frame, to_rgb(&o.out), stats))
+        Ok(o)
     }
 }
 

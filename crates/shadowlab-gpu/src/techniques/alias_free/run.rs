@@ -49,7 +49,10 @@ pub(super) struct Input<'a> {
 
 /// What a frame leaves: the shadow terms, counters, and the grid for `--dump`.
 pub(super) struct Outcome {
+    /// The shadow terms read back; empty when they stay on the device.
     pub(super) out: Vec<u8>,
+    /// The shadow terms' buffer, when they stay on the device.
+    pub(super) out_buffer: Option<wgpu::Buffer>,
     pub(super) counters: [u64; COUNTERS],
     pub(super) planes: Vec<u32>,
     pub(super) gpu_ms: Vec<(String, f64)>,
@@ -297,6 +300,8 @@ pub(super) struct Setting<'a> {
     pub(super) n_tris: u32,
     pub(super) leaf: u32,
     pub(super) dumping: bool,
+    /// Leave the shadow terms on the device (the counters are still read: a few words).
+    pub(super) on_device: bool,
 }
 
 /// Runs one frame: with as many triangles a batch as the buffers allow, and again with
@@ -397,7 +402,13 @@ fn run_once(
         Ok(())
     })?;
     stats.stage("resolve", || cx.submit("resolve", |c, e| c.resolve(e)))?;
-    let out = stats.stage("readback", || cx.read(&cx.b.out, pixels * 12))?;
+    let (out, out_buffer) = match set.on_device {
+        true => (Vec::new(), Some(cx.b.out.clone())),
+        false => (
+            stats.stage("readback", || cx.read(&cx.b.out, pixels * 12))?,
+            None,
+        ),
+    };
     let words = cx.read(&cx.b.counters, COUNTERS as u64 * 8)?;
     let mut counters = [0u64; COUNTERS];
     for (i, c) in counters.iter_mut().enumerate() {
@@ -411,6 +422,7 @@ fn run_once(
     };
     let o = Outcome {
         out: bytemuck::cast_slice(&out).to_vec(),
+        out_buffer,
         counters,
         planes,
         gpu_ms: cx.timer.read(gpu)?,

@@ -26,9 +26,10 @@
 use super::maps::{self, depth_scale, MapScene};
 use super::shadow_map::GpuShadowMap;
 use crate::compute::{bind, pipeline};
+use crate::resident::{self, ShadowTerm};
 use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
 use crate::transfer::{read_back, storage, uniform, Timer};
-use crate::upload::{view_buffer, LightU};
+use crate::upload::LightU;
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::Result;
 use shadowlab::light::{Light, LightView};
@@ -113,6 +114,8 @@ fn float_of_key(key: u32) -> f32 {
 pub struct GpuCascaded {
     cpu: Cascaded,
     scene: Option<MapScene>,
+    /// The last frame's cascades, for a viewer to show.
+    last_maps: Option<wgpu::Texture>,
 }
 
 /// The camera's eye and forward axis as the shaders read them.
@@ -130,6 +133,7 @@ fn depth_interval(
     ms: &MapScene,
     cpu: &Cascaded,
     frame: &Frame,
+    view: &wgpu::Buffer,
     timer: &mut Timer,
     stats: &mut Stats,
 ) -> Result<(f32, f32)> {
@@ -138,7 +142,6 @@ fn depth_interval(
         return Ok((cam.near, cam.far));
     }
     let gpu = &ms.gpu;
-    let view = stats.stage("upload_view", || view_buffer(gpu, frame.view))?;
     let (count, row, (gx, gy)) = maps::lookup_grid(gpu, frame);
     let (eye, forward) = eye_forward(frame);
     let params = BoundsParams {
@@ -158,7 +161,7 @@ fn depth_interval(
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         });
     let reduce = gpu.stage(NAME, "pipeline", || pipeline(gpu, &DEPTH_BOUNDS, "main"))?;
-    let group = bind(&gpu.device, &reduce, &[&params, &view, &bounds]);
+    let group = bind(&gpu.device, &reduce, &[&params, view, &bounds]);
     let raw = stats.stage("depth_bounds", || {
         gpu.stage(NAME, "depth_bounds", || {
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -190,11 +193,24 @@ impl ShadowTechnique for GpuCascaded {
     crate::twin::twin_params!(cpu);
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
+        resident::read_back(self, frame)
+    }
+}
+
+impl ShadowTerm for GpuCascaded {
+    fn shadow_term(
+        &mut self,
+        frame: &Frame,
+        view: &wgpu::Buffer,
+        stats: &mut Stats,
+    ) -> Result<wgpu::Buffer> {
         let cpu = self.cpu.clone();
         check_resolution(NAME, cpu.resolution)?;
         let Light::Directional { to_light } = *frame.light else {
             return GpuShadowMap::fallback(
                 frame,
+                view,
+                stats,
                 cpu.kernel,
                 cpu.resolution,
                 cpu.bias,
@@ -204,14 +220,13 @@ impl ShadowTechnique for GpuCascaded {
         };
         let res = check_resolution(NAME, cpu.resolved_cascade_resolution())?;
         check_light_map_size(NAME, cpu.cascades, res)?;
-        let mut stats = Stats::default();
-        let ms = MapScene::keep(&mut self.scene, NAME, frame, &mut stats)?;
+        let ms = MapScene::keep(&mut self.scene, NAME, frame, stats)?;
         let gpu = ms.gpu.clone();
         let layers = cpu.cascades as u32;
         let texture = maps::depth_array(&gpu, NAME, &format!("{NAME}.resolution"), res, layers)?;
         let mut timer = Timer::new(&gpu, layers + 2);
-        let interval = depth_interval(ms, &cpu, frame, &mut timer, &mut stats)?;
-        let views = cpu.views(frame, to_light, interval, &mut stats);
+        let interval = depth_interval(ms, &cpu, frame, view, &mut timer, stats)?;
+        let views = cpu.views(frame, to_light, interval, stats);
         let lights: Vec<LightView> = views.iter().map(|v| v.2).collect();
         stats.stage("shadow_map", || {
             gpu.stage(NAME, "shadow_map", || {
@@ -263,14 +278,20 @@ impl ShadowTechnique for GpuCascaded {
                 wgpu::BindingResource::Sampler(&sampler),
             ],
             frame,
+            view,
             &mut timer,
-            &mut stats,
+            stats,
         )?;
         stats.memory_bytes = u64::from(res).pow(2) * u64::from(layers) * 4;
         stats.count("cascades", f64::from(layers));
         stats.count("cascade_resolution", f64::from(res));
         stats.count("map_texels", f64::from(res).powi(2) * f64::from(layers));
-        Ok(Shadows::of_frame(frame, value, stats))
+        self.last_maps = Some(texture);
+        Ok(value)
+    }
+
+    fn last_maps(&self) -> Option<&wgpu::Texture> {
+        self.last_maps.as_ref()
     }
 }
 

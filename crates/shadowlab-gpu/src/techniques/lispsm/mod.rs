@@ -17,6 +17,7 @@
 
 use super::maps::{self, depth_scale, MapScene};
 use super::shadow_map::GpuShadowMap;
+use crate::resident::{self, ShadowTerm};
 use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
 use crate::transfer::{uniform, Timer};
 use crate::upload::LightU;
@@ -61,6 +62,8 @@ struct Params {
 pub struct GpuLispsm {
     cpu: LightSpacePerspective,
     scene: Option<MapScene>,
+    /// The last frame's map, for a viewer to show.
+    last_maps: Option<wgpu::Texture>,
 }
 
 impl ShadowTechnique for GpuLispsm {
@@ -71,11 +74,24 @@ impl ShadowTechnique for GpuLispsm {
     crate::twin::twin_params!(cpu);
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
+        resident::read_back(self, frame)
+    }
+}
+
+impl ShadowTerm for GpuLispsm {
+    fn shadow_term(
+        &mut self,
+        frame: &Frame,
+        view: &wgpu::Buffer,
+        stats: &mut Stats,
+    ) -> Result<wgpu::Buffer> {
         let res = check_resolution(NAME, self.cpu.resolution)?;
         let Light::Directional { to_light } = *frame.light else {
             let c = &self.cpu;
             return GpuShadowMap::fallback(
                 frame,
+                view,
+                stats,
                 c.kernel,
                 c.resolution,
                 c.bias,
@@ -84,18 +100,24 @@ impl ShadowTechnique for GpuLispsm {
             );
         };
         check_light_map_size(NAME, 1, res)?;
-        let mut stats = Stats::default();
-        let Some((basis, warp, view)) = stats.stage("fit", || self.cpu.fit(frame, to_light)) else {
-            return Ok(Shadows::of_frame(frame, maps::unreached(frame), stats));
+        let Some((basis, warp, light_view)) = stats.stage("fit", || self.cpu.fit(frame, to_light))
+        else {
+            return maps::unreached(frame);
         };
         let cpu = self.cpu.clone();
-        let ms = MapScene::keep(&mut self.scene, NAME, frame, &mut stats)?;
+        let ms = MapScene::keep(&mut self.scene, NAME, frame, stats)?;
         let gpu = ms.gpu.clone();
         let texture = maps::depth_array(&gpu, NAME, &format!("{NAME}.resolution"), res, 1)?;
         let mut timer = Timer::new(&gpu, 2);
         stats.stage("shadow_map", || {
             gpu.stage(NAME, "shadow_map", || {
-                maps::draw_views(ms, &texture, std::slice::from_ref(&view), frame, &mut timer)
+                maps::draw_views(
+                    ms,
+                    &texture,
+                    std::slice::from_ref(&light_view),
+                    frame,
+                    &mut timer,
+                )
             })
         })?;
         let (count, row, _) = maps::lookup_grid(&gpu, frame);
@@ -103,7 +125,7 @@ impl ShadowTechnique for GpuLispsm {
         let k = 2.0 * (warp.n + d) / d;
         let slope = pcf_slope_bias(cpu.slope_bias, cpu.kernel);
         let params = Params {
-            clip_from_world: view.clip_from_world.to_cols_array(),
+            clip_from_world: light_view.clip_from_world.to_cols_array(),
             light_from_world: basis.to_cols_array(),
             light: LightU::of(frame.light),
             count,
@@ -112,7 +134,7 @@ impl ShadowTechnique for GpuLispsm {
             kernel: cpu.kernel,
             bias: cpu.bias,
             slope_bias: slope,
-            depth_scale: depth_scale(&view),
+            depth_scale: depth_scale(&light_view),
             eye_y: warp.ey as f32,
             texel_x: ((warp.x_window.1 - warp.x_window.0) / f64::from(res)) as f32,
             texel_y: (2.0 / (k * warp.n * f64::from(res))) as f32,
@@ -131,13 +153,19 @@ impl ShadowTechnique for GpuLispsm {
                 wgpu::BindingResource::Sampler(&sampler),
             ],
             frame,
+            view,
             &mut timer,
-            &mut stats,
+            stats,
         )?;
         stats.memory_bytes = u64::from(res).pow(2) * 4;
         stats.count("n", warp.n);
         stats.count("map_texels", f64::from(res).powi(2));
-        Ok(Shadows::of_frame(frame, value, stats))
+        self.last_maps = Some(texture);
+        Ok(value)
+    }
+
+    fn last_maps(&self) -> Option<&wgpu::Texture> {
+        self.last_maps.as_ref()
     }
 }
 

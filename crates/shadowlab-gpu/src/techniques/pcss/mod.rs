@@ -24,11 +24,12 @@
 mod min_pyramid;
 
 use super::maps::{self, MapScene};
-use crate::compute::{pipeline, to_rgb};
+use crate::compute::pipeline;
 use crate::device::Gpu;
+use crate::resident::{self, ShadowTerm};
 use crate::shader::{Common, Stage, LIGHT, RAY_OFFSET};
-use crate::transfer::{output, read_back, uniform, Timer};
-use crate::upload::{view_buffer, LightU};
+use crate::transfer::{output, uniform, Timer};
+use crate::upload::LightU;
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::Result;
 use shadowlab::light::light_views;
@@ -83,6 +84,8 @@ struct Params {
 pub struct GpuPcss {
     cpu: Pcss,
     scene: Option<MapScene>,
+    /// The last frame's maps, for a viewer to show.
+    last_maps: Option<wgpu::Texture>,
 }
 
 impl ShadowTechnique for GpuPcss {
@@ -103,10 +106,20 @@ impl ShadowTechnique for GpuPcss {
     }
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
+        resident::read_back(self, frame)
+    }
+}
+
+impl ShadowTerm for GpuPcss {
+    fn shadow_term(
+        &mut self,
+        frame: &Frame,
+        view: &wgpu::Buffer,
+        stats: &mut Stats,
+    ) -> Result<wgpu::Buffer> {
         let side = check_resolution(NAME, self.cpu.resolution)?;
-        let mut stats = Stats::default();
         let cpu = self.cpu.clone();
-        let ms = MapScene::keep(&mut self.scene, NAME, frame, &mut stats)?;
+        let ms = MapScene::keep(&mut self.scene, NAME, frame, stats)?;
         let gpu = ms.gpu.clone();
         let views = light_views(
             frame.light,
@@ -124,7 +137,6 @@ impl ShadowTechnique for GpuPcss {
         })?;
         let sampler = maps::comparison_sampler(&gpu);
         let (n, row, (gx, gy)) = maps::lookup_grid(&gpu, frame);
-        let view = stats.stage("upload_view", || view_buffer(&gpu, frame.view))?;
         let out = output(&gpu, "the shadow terms", u64::from(n) * 12)?;
         let radii = output(&gpu, "the penumbra radii", u64::from(n) * 4)?;
         let mut timer = Timer::new(&gpu, 32);
@@ -182,11 +194,6 @@ impl ShadowTechnique for GpuPcss {
                 })
             })?;
         }
-        let raw = stats.stage("readback", || {
-            gpu.stage(NAME, "readback", || {
-                read_back(&gpu, &out, u64::from(n) * 12)
-            })
-        })??;
         for (stage, ms) in timer.read(&gpu)? {
             stats.count(&format!("gpu_{stage}_ms"), ms);
         }
@@ -194,7 +201,12 @@ impl ShadowTechnique for GpuPcss {
         stats.count("map_texels", f64::from(side).powi(2) * f64::from(layers));
         stats.count("hardware_raster", 1.0);
         stats.device = Some(gpu.adapter.label());
-        Ok(Shadows::of_frame(frame, to_rgb(&raw), stats))
+        self.last_maps = Some(map);
+        Ok(out)
+    }
+
+    fn last_maps(&self) -> Option<&wgpu::Texture> {
+        self.last_maps.as_ref()
     }
 }
 

@@ -30,6 +30,7 @@
 use super::maps::{self, MapScene};
 use super::shadow_map::GpuShadowMap;
 use crate::compute::render_pipeline;
+use crate::resident::{self, ShadowTerm};
 use crate::shader::{Stage, ALPHA_MASK, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET, TRIANGLES};
 use crate::transfer::{storage, uniform, Timer};
 use crate::upload::LightU;
@@ -108,6 +109,8 @@ const NO_CLIP: f32 = -f32::MAX;
 pub struct GpuPsm {
     cpu: Perspective,
     scene: Option<MapScene>,
+    /// The last frame's post-perspective maps, for a viewer to show.
+    last_maps: Option<wgpu::Texture>,
 }
 
 /// The stage's code for the post-space light's kind.
@@ -120,13 +123,20 @@ fn kind_code(kind: PostLight) -> u32 {
 }
 
 impl GpuPsm {
-    /// Draws the post-perspective maps of `setup` and looks every pixel up.
-    fn draw(&mut self, frame: &Frame, setup: &Setup, mut stats: Stats) -> Result<Shadows> {
+    /// Draws the post-perspective maps of `setup` and looks every pixel of the uploaded
+    /// `view` up.
+    fn draw(
+        &mut self,
+        frame: &Frame,
+        view: &wgpu::Buffer,
+        setup: &Setup,
+        stats: &mut Stats,
+    ) -> Result<wgpu::Buffer> {
         let cpu = self.cpu.clone();
         let res = cpu.resolution;
         let layers = setup.maps.len() as u32;
         check_light_map_size(NAME, setup.maps.len(), res)?;
-        let ms = MapScene::keep(&mut self.scene, NAME, frame, &mut stats)?;
+        let ms = MapScene::keep(&mut self.scene, NAME, frame, stats)?;
         let gpu = ms.gpu.clone();
         let texture = maps::depth_array(&gpu, NAME, &format!("{NAME}.resolution"), res, layers)?;
         let mut timer = Timer::new(&gpu, layers + 1);
@@ -211,8 +221,9 @@ impl GpuPsm {
                 wgpu::BindingResource::TextureView(&array),
             ],
             frame,
+            view,
             &mut timer,
-            &mut stats,
+            stats,
         )?;
         stats.memory_bytes = u64::from(res).pow(2) * u64::from(layers) * 4;
         stats.count("map_texels", f64::from(res).powi(2) * f64::from(layers));
@@ -226,7 +237,8 @@ impl GpuPsm {
         stats.count("near", setup.post.near);
         stats.count("far", setup.post.far);
         stats.count("body_vertices", setup.post.body.len() as f64);
-        Ok(Shadows::of_frame(frame, value, stats))
+        self.last_maps = Some(texture);
+        Ok(value)
     }
 }
 
@@ -238,17 +250,29 @@ impl ShadowTechnique for GpuPsm {
     crate::twin::twin_params!(cpu);
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
-        let mut stats = Stats::default();
+        resident::read_back(self, frame)
+    }
+}
+
+impl ShadowTerm for GpuPsm {
+    fn shadow_term(
+        &mut self,
+        frame: &Frame,
+        view: &wgpu::Buffer,
+        stats: &mut Stats,
+    ) -> Result<wgpu::Buffer> {
         let plan = stats.stage("body", || self.cpu.plan(frame))?;
         match plan {
             Plan::NoReceivers => {
                 stats.count("maps", 0.0);
-                Ok(Shadows::of_frame(frame, maps::unreached(frame), stats))
+                maps::unreached(frame)
             }
             Plan::Uniform => {
                 let c = &self.cpu;
                 GpuShadowMap::fallback(
                     frame,
+                    view,
+                    stats,
                     0,
                     c.resolution,
                     c.bias,
@@ -256,8 +280,12 @@ impl ShadowTechnique for GpuPsm {
                     "uniform_fallback",
                 )
             }
-            Plan::Maps(setup) => self.draw(frame, &setup, stats),
+            Plan::Maps(setup) => self.draw(frame, view, &setup, stats),
         }
+    }
+
+    fn last_maps(&self) -> Option<&wgpu::Texture> {
+        self.last_maps.as_ref()
     }
 }
 

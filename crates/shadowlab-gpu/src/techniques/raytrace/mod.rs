@@ -23,11 +23,12 @@
 //! lower triangle index on equal distance) and averages the shadow terms of those that hit,
 //! as the reference does. Area lights are not traced here (the CPU `raytrace` does).
 
-use crate::compute::{bind, pipeline, to_rgb};
+use crate::compute::{bind, pipeline};
 use crate::device::{shared, Gpu};
+use crate::resident::{self, ShadowTerm};
 use crate::shader::{Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, TRIANGLES, WATERTIGHT};
-use crate::transfer::{grid, output, read_back, uniform, Timer};
-use crate::upload::{view_buffer, BvhBuffers, LightU, SceneBuffers, SceneKey};
+use crate::transfer::{grid, output, uniform, Timer};
+use crate::upload::{BvhBuffers, LightU, SceneBuffers, SceneKey};
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::{Error, Result};
 use shadowlab::math::{gamma, Vec2};
@@ -117,22 +118,32 @@ impl ShadowTechnique for GpuRayTrace {
     crate::twin::twin_params!(cpu);
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
+        resident::read_back(self, frame)
+    }
+}
+
+impl ShadowTerm for GpuRayTrace {
+    /// The rays traced for the uploaded `view`: the shadow terms on the device.
+    fn shadow_term(
+        &mut self,
+        frame: &Frame,
+        view: &wgpu::Buffer,
+        stats: &mut Stats,
+    ) -> Result<wgpu::Buffer> {
         if frame.area.is_some() {
             return Err(Error::param(format!(
                 "{NAME} traces punctual lights only: use raytrace for the area light's soft reference"
             )));
         }
         let spp = self.cpu.spp;
-        let mut stats = Stats::default();
-        let res = self.resident(frame, &mut stats)?;
+        let res = self.resident(frame, stats)?;
         let gpu = res.gpu.clone();
         let n = frame.view.triangle.len() as u32;
         let out = output(&gpu, "the shadow terms", u64::from(n) * 12)?;
         let mut timer = Timer::new(&gpu, 2);
         if spp <= 1 {
-            let view = stats.stage("upload_view", || view_buffer(&gpu, frame.view))?;
             stats.stage("trace", || {
-                gpu.stage(NAME, "trace", || trace(res, frame, &view, &out, &mut timer))
+                gpu.stage(NAME, "trace", || trace(res, frame, view, &out, &mut timer))
             })??;
         } else {
             let samples = pattern(PatternKind::Grid, spp)?;
@@ -140,18 +151,12 @@ impl ShadowTechnique for GpuRayTrace {
                 let p = gpu.stage(NAME, "pipeline", || pipeline(&gpu, &TRACE, "supersample"))?;
                 res.supersample = Some(p);
             }
-            let view = stats.stage("upload_view", || view_buffer(&gpu, frame.view))?;
             stats.stage("trace", || {
                 gpu.stage(NAME, "trace", || {
-                    supersample(res, frame, &view, &samples, &out, &mut timer)
+                    supersample(res, frame, view, &samples, &out, &mut timer)
                 })
             })??;
         }
-        let raw = stats.stage("readback", || {
-            gpu.stage(NAME, "readback", || {
-                read_back(&gpu, &out, u64::from(n) * 12)
-            })
-        })??;
         for (stage, ms) in timer.read(&gpu)? {
             stats.count(&format!("gpu_{stage}_ms"), ms);
         }
@@ -161,7 +166,7 @@ impl ShadowTechnique for GpuRayTrace {
         );
         stats.memory_bytes = res.scene.bytes + res.bvh.bytes;
         stats.device = Some(gpu.adapter.label());
-        Ok(Shadows::of_frame(frame, to_rgb(&raw), stats))
+        Ok(out)
     }
 }
 

@@ -21,6 +21,7 @@
 //! (`counters.hardware_raster = 1`); a compute rasterizer is not offered yet.
 
 use super::maps::{self, MapScene};
+use crate::resident::{self, ShadowTerm};
 use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
 use crate::transfer::{uniform, Timer};
 use crate::upload::LightU;
@@ -62,6 +63,8 @@ pub struct GpuShadowMap {
     name: &'static str,
     cpu: ShadowMap,
     scene: Option<MapScene>,
+    /// The last frame's maps, for a viewer to show.
+    last_maps: Option<wgpu::Texture>,
 }
 
 impl GpuShadowMap {
@@ -71,6 +74,7 @@ impl GpuShadowMap {
             name: SM,
             cpu: ShadowMap::standard(),
             scene: None,
+            last_maps: None,
         }
     }
 
@@ -80,20 +84,24 @@ impl GpuShadowMap {
             name: PCF,
             cpu: ShadowMap::pcf(),
             scene: None,
+            last_maps: None,
         }
     }
 
     /// The single map a warped or split map falls back to where its CPU twin does: `gpu:sm`
-    /// (kernel 0) or `gpu:pcf` with these parameters, rendering `frame` and counting
-    /// `counter`.
+    /// (kernel 0) or `gpu:pcf` with these parameters, rendering `frame` over the uploaded
+    /// `view` into `stats` and counting `counter`.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn fallback(
         frame: &Frame,
+        view: &wgpu::Buffer,
+        stats: &mut Stats,
         kernel: u32,
         resolution: u32,
         bias: f32,
         slope_bias: f32,
         counter: &str,
-    ) -> Result<Shadows> {
+    ) -> Result<wgpu::Buffer> {
         let mut sm = if kernel > 0 {
             GpuShadowMap::pcf()
         } else {
@@ -105,9 +113,9 @@ impl GpuShadowMap {
         if kernel > 0 {
             sm.set_param("kernel", &kernel.to_string())?;
         }
-        let mut s = sm.render(frame)?;
-        s.stats.count(counter, 1.0);
-        Ok(s)
+        let terms = sm.shadow_term(frame, view, stats)?;
+        stats.count(counter, 1.0);
+        Ok(terms)
     }
 }
 
@@ -119,11 +127,21 @@ impl ShadowTechnique for GpuShadowMap {
     crate::twin::twin_params!(cpu);
 
     fn render(&mut self, frame: &Frame) -> Result<Shadows> {
+        resident::read_back(self, frame)
+    }
+}
+
+impl ShadowTerm for GpuShadowMap {
+    fn shadow_term(
+        &mut self,
+        frame: &Frame,
+        view: &wgpu::Buffer,
+        stats: &mut Stats,
+    ) -> Result<wgpu::Buffer> {
         let name = self.name;
         let res = check_resolution(name, self.cpu.resolution)?;
-        let mut stats = Stats::default();
         let cpu = self.cpu.clone();
-        let ms = MapScene::keep(&mut self.scene, name, frame, &mut stats)?;
+        let ms = MapScene::keep(&mut self.scene, name, frame, stats)?;
         let gpu = ms.gpu.clone();
         let views = light_views(
             frame.light,
@@ -165,12 +183,18 @@ impl ShadowTechnique for GpuShadowMap {
                 wgpu::BindingResource::Sampler(&sampler),
             ],
             frame,
+            view,
             &mut timer,
-            &mut stats,
+            stats,
         )?;
         stats.memory_bytes = u64::from(res).pow(2) * u64::from(layers) * 4;
         stats.count("map_texels", f64::from(res).powi(2) * f64::from(layers));
-        Ok(Shadows::of_frame(frame, value, stats))
+        self.last_maps = Some(texture);
+        Ok(value)
+    }
+
+    fn last_maps(&self) -> Option<&wgpu::Texture> {
+        self.last_maps.as_ref()
     }
 }
 

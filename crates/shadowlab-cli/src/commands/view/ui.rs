@@ -1,0 +1,450 @@
+//! The panel, drawn with egui in the column right of the view: the technique (CPU and
+//! GPU pickers), every parameter of its table (slider or choice, and a field; the range,
+//! default and meaning as the tooltip), the light, the stage timings of the last frames,
+//! the adapter and who draws, the error against the reference, the technique's own
+//! images, screenshot and the command line.
+//!
+//! The panel does not change the session itself: it returns [`Action`]s, applied before
+//! the next frame is drawn. Every widget a person can use is recorded with its label and
+//! rectangle ([`Widgets`]), so that a script clicks a widget by its label in the last
+//! frame's layout, as a pointer would.
+
+use super::window::PANEL_WIDTH;
+use shadowlab::techniques::{param_text, ParamRange, ParamSpec};
+use std::collections::{BTreeMap, VecDeque};
+
+/// Frames of stage timings the plot shows.
+pub const HISTORY: usize = 120;
+
+/// What a person did in the panel.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Action {
+    /// Switch to this technique.
+    Technique(String),
+    /// Set a parameter of the current technique (key, value as text).
+    Param(String, String),
+    /// The light: its kind.
+    LightKind(LightKind),
+    /// The light: its direction (directional) or position (point, spot).
+    LightVector([f32; 3]),
+    /// The spot's opening angle in degrees.
+    SpotAngle(f32),
+    /// The error overlay on or off.
+    Error(bool),
+    /// The technique's image shown, by index; `None` for none.
+    Dump(Option<usize>),
+    /// The layer of the technique's depth maps shown (on the device); `None` for none.
+    MapLayer(Option<u32>),
+    /// A screenshot.
+    Screenshot,
+    /// The `render` command line to the clipboard.
+    CopyCommand,
+}
+
+/// A light's kind, as the panel offers them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightKind {
+    /// Parallel rays.
+    Directional,
+    /// From a point, all around.
+    Point,
+    /// From a point, within a cone.
+    Spot,
+}
+
+/// The widgets drawn in a frame, by label.
+#[derive(Clone, Debug, Default)]
+pub struct Widgets {
+    /// Label and rectangle (pixels), in drawing order.
+    pub rects: Vec<(String, egui::Rect)>,
+}
+
+impl Widgets {
+    /// The centre of the widget labelled `label`.
+    pub fn centre(&self, label: &str) -> Option<egui::Pos2> {
+        self.rects
+            .iter()
+            .rev()
+            .find(|(l, _)| l == label)
+            .map(|(_, r)| r.center())
+    }
+
+    /// The labels, for an error message.
+    pub fn labels(&self) -> Vec<String> {
+        self.rects.iter().map(|(l, _)| l.clone()).collect()
+    }
+
+    fn add(&mut self, label: impl Into<String>, ui: &egui::Ui, r: &egui::Response) {
+        // Only what can be clicked: the part inside the visible clip area.
+        let vis = r.rect.intersect(ui.clip_rect());
+        if vis.is_positive() {
+            self.rects.push((label.into(), vis));
+        }
+    }
+}
+
+/// What the panel shows (read from the session and the last frame).
+pub struct PanelState<'a> {
+    /// The technique's name.
+    pub technique: &'a str,
+    /// Names in the CPU picker.
+    pub cpu_names: &'a [String],
+    /// Names in the GPU picker.
+    pub gpu_names: &'a [String],
+    /// The parameter table and the current values.
+    pub specs: Vec<ParamSpec>,
+    /// Current values.
+    pub values: BTreeMap<String, serde_json::Value>,
+    /// Default values (a fresh technique's).
+    pub defaults: BTreeMap<String, serde_json::Value>,
+    /// The light's kind, vector and spot angle.
+    pub light: (LightKind, [f32; 3], f32),
+    /// Who draws, whether the path reads back.
+    pub backend: String,
+    /// The adapter's line.
+    pub adapter: String,
+    /// The last frames' stages, oldest first.
+    pub history: &'a VecDeque<Vec<(String, f64)>>,
+    /// The error line (figures or "tracing").
+    pub error: Option<String>,
+    /// The error overlay on.
+    pub error_on: bool,
+    /// The technique's images: names; the one shown and its texture.
+    pub dumps: Vec<String>,
+    /// The image shown.
+    pub dump: Option<(usize, egui::TextureId, [f32; 2])>,
+    /// The layers of the technique's depth maps on the device (0 for none).
+    pub maps: u32,
+    /// The layer shown and its picture.
+    pub map: Option<(u32, egui::TextureId)>,
+    /// The last message.
+    pub status: &'a str,
+    /// The command line of the view.
+    pub command: String,
+}
+
+/// The panel's own memory across frames: the text being typed into each field.
+#[derive(Default)]
+pub struct Fields {
+    text: BTreeMap<String, String>,
+    technique: String,
+}
+
+/// Draws the panel; returns the actions and the widgets by label.
+pub fn panel(
+    ctx: &egui::Context,
+    view_width: u32,
+    s: &PanelState,
+    fields: &mut Fields,
+) -> (Vec<Action>, Widgets) {
+    if fields.technique != s.technique {
+        fields.text.clear();
+        fields.technique = s.technique.to_string();
+    }
+    let mut out = Vec::new();
+    let mut w = Widgets::default();
+    let area = egui::Rect::from_min_size(
+        egui::pos2(view_width as f32, 0.0),
+        egui::vec2(PANEL_WIDTH as f32, ctx.content_rect().height()),
+    );
+    egui::Area::new(egui::Id::unique("panel"))
+        .fixed_pos(area.min)
+        .show(ctx, |ui| {
+            ui.set_clip_rect(area);
+            egui::Frame::new()
+                .fill(egui::Color32::from_gray(24))
+                .inner_margin(6.0)
+                .show(ui, |ui| {
+                    ui.set_width(area.width() - 12.0);
+                    ui.set_min_height(area.height() - 12.0);
+                    egui::ScrollArea::vertical().show(ui, |ui| {
+                        technique(ui, s, &mut out, &mut w);
+                        params(ui, s, fields, &mut out, &mut w);
+                        error(ui, s, &mut out, &mut w);
+                        light(ui, s, &mut out, &mut w);
+                        actions(ui, s, &mut out, &mut w);
+                        views(ui, s, &mut out, &mut w);
+                        super::timings::timings(ui, s);
+                    });
+                });
+        });
+    (out, w)
+}
+
+fn technique(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widgets) {
+    ui.heading(s.technique);
+    for (label, names) in [
+        ("cpu technique", s.cpu_names),
+        ("gpu technique", s.gpu_names),
+    ] {
+        let current = if names.iter().any(|n| n == s.technique) {
+            s.technique
+        } else {
+            "-"
+        };
+        ui.horizontal(|ui| {
+            let r = egui::ComboBox::from_id_salt(label)
+                .selected_text(current)
+                .height(560.0)
+                .show_ui(ui, |ui| {
+                    for n in names {
+                        let r = ui.selectable_label(n == s.technique, n.as_str());
+                        w.add(n.clone(), ui, &r);
+                        if r.clicked() && n != s.technique {
+                            out.push(Action::Technique(n.clone()));
+                        }
+                    }
+                });
+            w.add(label, ui, &r.response);
+            ui.label(label);
+        });
+    }
+}
+
+/// The tooltip of a parameter: its meaning, range and default.
+fn tooltip(spec: &ParamSpec, default: Option<&serde_json::Value>) -> String {
+    let d = default.map(param_text).unwrap_or_default();
+    format!("{}\nrange {}, default {d}", spec.meaning, spec.range)
+}
+
+fn params(
+    ui: &mut egui::Ui,
+    s: &PanelState,
+    fields: &mut Fields,
+    out: &mut Vec<Action>,
+    w: &mut Widgets,
+) {
+    ui.separator();
+    ui.label("parameters");
+    if s.specs.is_empty() {
+        ui.label("(none)");
+    }
+    egui::Grid::new("params").num_columns(2).show(ui, |ui| {
+        for spec in &s.specs {
+            let value = s.values.get(spec.key).cloned().unwrap_or_default();
+            let tip = tooltip(spec, s.defaults.get(spec.key));
+            ui.label(spec.key).on_hover_text(&tip);
+            ui.horizontal(|ui| {
+                param(ui, spec, &value, &tip, fields, out, w);
+            });
+            ui.end_row();
+        }
+    });
+}
+
+fn param(
+    ui: &mut egui::Ui,
+    spec: &ParamSpec,
+    value: &serde_json::Value,
+    tip: &str,
+    fields: &mut Fields,
+    out: &mut Vec<Action>,
+    w: &mut Widgets,
+) {
+    let key = spec.key.to_string();
+    match spec.range {
+        ParamRange::Flag => {
+            let mut on = value.as_bool().unwrap_or(false);
+            let r = ui.checkbox(&mut on, "").on_hover_text(tip);
+            w.add(&key, ui, &r);
+            if r.changed() {
+                out.push(Action::Param(key, on.to_string()));
+            }
+        }
+        ParamRange::Choice(words) => {
+            let now = value.as_str().unwrap_or("").to_string();
+            let r = egui::ComboBox::from_id_salt(&key)
+                .selected_text(&now)
+                .show_ui(ui, |ui| {
+                    for word in words {
+                        let r = ui.selectable_label(*word == now, *word);
+                        w.add(format!("{key}={word}"), ui, &r);
+                        if r.clicked() && *word != now {
+                            out.push(Action::Param(key.clone(), word.to_string()));
+                        }
+                    }
+                });
+            w.add(&key, ui, &r.response.on_hover_text(tip));
+        }
+        ParamRange::Int(lo, hi) => {
+            let mut v = value.as_i64().unwrap_or(lo);
+            let r = ui.add(
+                egui::Slider::new(&mut v, lo..=hi)
+                    .logarithmic(lo >= 0 && hi > 1000)
+                    .show_value(false),
+            );
+            w.add(format!("{key} slider"), ui, &r);
+            if r.drag_stopped() || (r.changed() && !r.dragged()) {
+                out.push(Action::Param(key.clone(), v.to_string()));
+            }
+            field(ui, &key, value, tip, fields, out, w);
+        }
+        ParamRange::Real(lo, hi) => {
+            let mut v = value.as_f64().unwrap_or(lo);
+            let r = ui.add(egui::Slider::new(&mut v, lo..=hi).show_value(false));
+            w.add(format!("{key} slider"), ui, &r);
+            if r.drag_stopped() || (r.changed() && !r.dragged()) {
+                out.push(Action::Param(key.clone(), param_text(&v.into())));
+            }
+            field(ui, &key, value, tip, fields, out, w);
+        }
+    }
+}
+
+/// A text field for a number: applied on Enter.
+fn field(
+    ui: &mut egui::Ui,
+    key: &str,
+    value: &serde_json::Value,
+    tip: &str,
+    fields: &mut Fields,
+    out: &mut Vec<Action>,
+    w: &mut Widgets,
+) {
+    let text = fields
+        .text
+        .entry(key.to_string())
+        .or_insert_with(|| param_text(value));
+    let r = ui
+        .add(egui::TextEdit::singleline(text).desired_width(70.0))
+        .on_hover_text(tip);
+    w.add(key, ui, &r);
+    if r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
+        out.push(Action::Param(key.to_string(), text.trim().to_string()));
+    } else if !r.has_focus() {
+        // Shows the value in force (a refused one is replaced by it).
+        *text = param_text(value);
+    }
+}
+
+fn light(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widgets) {
+    ui.separator();
+    ui.label("light (right drag in the view turns it)");
+    let (kind, v, angle) = s.light;
+    ui.horizontal(|ui| {
+        for (k, name) in [
+            (LightKind::Directional, "directional"),
+            (LightKind::Point, "point"),
+            (LightKind::Spot, "spot"),
+        ] {
+            let r = ui.radio(kind == k, name);
+            w.add(name, ui, &r);
+            if r.clicked() && kind != k {
+                out.push(Action::LightKind(k));
+            }
+        }
+    });
+    let what = if kind == LightKind::Directional {
+        "towards"
+    } else {
+        "at"
+    };
+    ui.horizontal(|ui| {
+        ui.label(what);
+        let mut nv = v;
+        let mut changed = false;
+        for (i, axis) in ["x", "y", "z"].iter().enumerate() {
+            let r = ui.add(egui::DragValue::new(&mut nv[i]).speed(0.01).prefix(*axis));
+            w.add(format!("light {axis}"), ui, &r);
+            changed |= r.changed();
+        }
+        if changed {
+            out.push(Action::LightVector(nv));
+        }
+    });
+    if kind == LightKind::Spot {
+        let mut a = angle;
+        let r = ui.add(egui::Slider::new(&mut a, 1.0..=170.0).text("opening (degrees)"));
+        w.add("spot opening", ui, &r);
+        if r.changed() {
+            out.push(Action::SpotAngle(a));
+        }
+    }
+    ui.label("area lights: not in the viewer (render --area-light)");
+}
+
+fn error(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widgets) {
+    ui.separator();
+    let mut on = s.error_on;
+    let r = ui.checkbox(&mut on, "error overlay");
+    w.add("error overlay", ui, &r);
+    if r.changed() {
+        out.push(Action::Error(on));
+    }
+    if let Some(line) = &s.error {
+        ui.label(line);
+    }
+}
+
+fn views(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widgets) {
+    ui.separator();
+    let shown = s.dump.map(|d| d.0);
+    let text = shown
+        .and_then(|i| s.dumps.get(i).cloned())
+        .or_else(|| s.map.map(|m| format!("shadow map {}", m.0)))
+        .unwrap_or_else(|| "none".to_string());
+    let r = egui::ComboBox::from_id_salt("technique view")
+        .selected_text(text)
+        .show_ui(ui, |ui| {
+            let r = ui.selectable_label(shown.is_none() && s.map.is_none(), "none");
+            w.add("view none", ui, &r);
+            if r.clicked() {
+                out.push(Action::Dump(None));
+                out.push(Action::MapLayer(None));
+            }
+            for i in 0..s.maps {
+                let name = format!("shadow map {i}");
+                let r = ui.selectable_label(s.map.is_some_and(|m| m.0 == i), &name);
+                w.add(format!("view {name}"), ui, &r);
+                if r.clicked() {
+                    out.push(Action::MapLayer(Some(i)));
+                }
+            }
+            for (i, name) in s.dumps.iter().enumerate() {
+                let r = ui.selectable_label(shown == Some(i), name);
+                w.add(format!("view {name}"), ui, &r);
+                if r.clicked() {
+                    out.push(Action::Dump(Some(i)));
+                }
+            }
+            if s.dumps.is_empty() && s.maps == 0 {
+                // Asking once draws the frame with the technique's images kept.
+                let r = ui.selectable_label(false, "(look for images)");
+                w.add("view look", ui, &r);
+                if r.clicked() {
+                    out.push(Action::Dump(Some(0)));
+                }
+            }
+        });
+    w.add("technique view", ui, &r.response);
+    ui.label("technique view");
+    if let Some((_, id)) = s.map {
+        let side = ui.available_width().min(256.0);
+        let r = ui.image((id, egui::vec2(side, side)));
+        w.add("shadow map picture", ui, &r);
+    }
+    if let Some((_, id, [iw, ih])) = s.dump {
+        let scale = (ui.available_width() / iw).min(1.0);
+        ui.image((id, egui::vec2(iw * scale, ih * scale)));
+    }
+}
+
+fn actions(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widgets) {
+    ui.separator();
+    ui.horizontal(|ui| {
+        let r = ui.button("screenshot");
+        w.add("screenshot", ui, &r);
+        if r.clicked() {
+            out.push(Action::Screenshot);
+        }
+        let r = ui.button("copy command line").on_hover_text(&s.command);
+        w.add("copy command line", ui, &r);
+        if r.clicked() {
+            out.push(Action::CopyCommand);
+        }
+    });
+    if !s.status.is_empty() {
+        ui.colored_label(egui::Color32::from_rgb(240, 170, 80), s.status);
+    }
+    ui.label("keys: WASD EQ fly, Tab technique, [ ] parameter, R error, M images, H hide, P shot");
+}

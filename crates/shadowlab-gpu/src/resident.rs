@@ -1,0 +1,105 @@
+//! The shadow term kept on the device: for a window that shades and measures on the GPU
+//! (the viewer), a technique may leave its result in a device buffer instead of reading it
+//! back. Techniques opt in by implementing [`OnDevice`];
+//! `techniques::create_on_device` makes those that do by name, and every other
+//! technique works as before through [`ShadowTechnique::render`] (its result uploaded by
+//! the caller).
+
+use crate::compute::to_rgb;
+use crate::device::{shared, Gpu};
+use crate::transfer::read_back as read_back_bytes;
+use crate::upload::view_buffer;
+use shadowlab::error::Result;
+use shadowlab::math::Vec3;
+use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Stats};
+use wgpu::util::DeviceExt;
+
+/// A frame's shadow term on the device.
+pub struct DeviceShadows {
+    /// Three `f32` a pixel (RGB transmittance towards the light), row-major from the top
+    /// row: the layout [`ShadowTechnique::render`] reads back.
+    pub visibility: wgpu::Buffer,
+    /// The frame's stages, counters and device, as `render` reports them.
+    pub stats: Stats,
+}
+
+/// A technique whose shadow term can stay on the device.
+pub trait OnDevice: ShadowTechnique {
+    /// Renders `frame`'s shadow term into a device buffer without reading it back;
+    /// `view` holds the frame's camera-pass samples already uploaded
+    /// ([`crate::upload::view_buffer`]). Small control words (timestamps, a technique's
+    /// overflow flags) may still be read.
+    fn render_on_device(&mut self, frame: &Frame, view: &wgpu::Buffer) -> Result<DeviceShadows>;
+
+    /// The last frame's depth maps, for a viewer to show: a `Depth32Float` array texture,
+    /// one layer a light view, holding linear depth over the view's far plane. `None` for
+    /// a technique without maps.
+    fn depth_maps(&self) -> Option<&wgpu::Texture> {
+        None
+    }
+}
+
+/// A technique whose whole frame is passes over the uploaded view samples that end in a
+/// shadow-term buffer: it is [`OnDevice`], and its [`ShadowTechnique::render`] is
+/// [`read_back`].
+pub(crate) trait ShadowTerm: ShadowTechnique {
+    /// The frame's passes over the uploaded `view`, counting into `stats`: the shadow
+    /// terms on the device (three `f32` a pixel).
+    fn shadow_term(
+        &mut self,
+        frame: &Frame,
+        view: &wgpu::Buffer,
+        stats: &mut Stats,
+    ) -> Result<wgpu::Buffer>;
+
+    /// The last frame's depth maps ([`OnDevice::depth_maps`]).
+    fn last_maps(&self) -> Option<&wgpu::Texture> {
+        None
+    }
+}
+
+impl<T: ShadowTerm> OnDevice for T {
+    fn render_on_device(&mut self, frame: &Frame, view: &wgpu::Buffer) -> Result<DeviceShadows> {
+        let mut stats = Stats::default();
+        let visibility = self.shadow_term(frame, view, &mut stats)?;
+        Ok(DeviceShadows { visibility, stats })
+    }
+
+    fn depth_maps(&self) -> Option<&wgpu::Texture> {
+        self.last_maps()
+    }
+}
+
+/// [`ShadowTechnique::render`] through [`OnDevice::render_on_device`]: the view samples
+/// uploaded (stage `upload_view`, first), the shadow terms read back (`readback`, last).
+pub(crate) fn read_back(t: &mut dyn OnDevice, frame: &Frame) -> Result<Shadows> {
+    let gpu = shared()?;
+    let name = t.name();
+    let mut up = Stats::default();
+    let view = up.stage("upload_view", || view_buffer(&gpu, frame.view))?;
+    let DeviceShadows {
+        visibility,
+        mut stats,
+    } = t.render_on_device(frame, &view)?;
+    stats.stages_ms.splice(0..0, up.stages_ms);
+    let bytes = frame.view.triangle.len() as u64 * 12;
+    let raw = stats.stage("readback", || {
+        gpu.stage(name, "readback", || {
+            read_back_bytes(&gpu, &visibility, bytes)
+        })
+    })??;
+    Ok(Shadows::of_frame(frame, to_rgb(&raw), stats))
+}
+
+/// Shadow terms computed on the CPU (a frame no map reaches) as a device buffer of the
+/// layout [`DeviceShadows::visibility`] has.
+pub(crate) fn upload_terms(gpu: &Gpu, terms: &[Vec3]) -> wgpu::Buffer {
+    let flat: Vec<f32> = terms.iter().flat_map(|v| v.to_array()).collect();
+    let bytes: &[u8] = bytemuck::cast_slice(&flat);
+    gpu.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("the shadow terms"),
+            contents: if bytes.is_empty() { &[0; 12] } else { bytes },
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        })
+}
