@@ -220,7 +220,7 @@ fn bench_engines_on_the_gpu_times_every_gpu_technique() {
         rows.iter()
             .any(|r| r["technique"] == n && r["frame_goal"].as_bool().unwrap_or(false) == goal)
     };
-    for n in ["gpu:sm", "gpu:pcf", "gpu:psm", "gpu:lispsm", "gpu:cascaded"] {
+    for &n in shadowlab_gpu::techniques::ALL {
         assert!(ran(n, false) && ran(n, true), "{n}: {rows:?}");
     }
     for r in &rows {
@@ -233,8 +233,15 @@ fn bench_engines_on_the_gpu_times_every_gpu_technique() {
             assert!(r["memory_bytes"].as_u64().unwrap() <= 4 << 20, "{r}");
         }
     }
-    // The goal ratio of the pair present in every build.
-    assert!(r.stdout.contains("time gpu:psm/gpu:sm"), "{}", r.stdout);
+    // The goal ratios of the paper's pairs.
+    for pair in [
+        "gpu:csm/gpu:pcf",
+        "gpu:psm/gpu:sm",
+        "gpu:msm/gpu:vsm",
+        "gpu:cascaded/gpu:sm",
+    ] {
+        assert!(r.stdout.contains(&format!("time {pair}")), "{}", r.stdout);
+    }
     assert!(dir
         .join("plots/engines-gpu-street-error-vs-time.svg")
         .exists());

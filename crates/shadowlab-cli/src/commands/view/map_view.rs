@@ -1,5 +1,6 @@
 //! The technique's own images in the panel: those it writes as `--dump` does, as egui's
-//! textures; and the depth maps of a technique drawn on the device (`gpu:sm`, `gpu:pcf`),
+//! textures; and the depth maps of a technique drawn on the device (`gpu:sm`, `gpu:pcf`,
+//! `gpu:psm`, `gpu:lispsm`, `gpu:cascaded`, `gpu:pcss`),
 //! the layer chosen converted there into a grey picture (near dark, far white) of at most
 //! [`SIDE`] texels a side.
 
