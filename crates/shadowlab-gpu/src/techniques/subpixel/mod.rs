@@ -5,7 +5,7 @@
 //! supports (directional, spot, a point light's six cube faces).
 //!
 //! Stages, one WGSL file each, named as the library's modules and the paper name them:
-//! `depth_map` (`gpu:sm`'s depth stage over the library's light views), `silhouette_edges`
+//! `shadow_map` (`gpu:sm`'s depth stage over the library's light views), `silhouette_edges`
 //! (the edges seen from the light as silhouettes, rasterized conservatively with their
 //! nearest depth per texel), `silhouette_mask_map` (hidden silhouettes dropped, the
 //! summed-area table), `facets` (the cheap bound, then the exact facet of each pixel near a

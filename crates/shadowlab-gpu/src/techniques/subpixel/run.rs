@@ -314,8 +314,8 @@ pub fn run(
     let texels = u64::from(res) * u64::from(res) * u64::from(nv);
     let mut timer = Timer::new(&gpu, 32);
     let map = maps::depth_array(&gpu, NAME, &format!("{NAME}.resolution"), res, nv)?;
-    stats.stage("depth_map", || {
-        gpu.stage(NAME, "depth_map", || {
+    stats.stage("shadow_map", || {
+        gpu.stage(NAME, "shadow_map", || {
             maps::draw_views(&r.ms, &map, &views, frame, &mut timer)
         })
     })?;
