@@ -46,6 +46,13 @@ pub const TRIANGLES: Common = Common {
     source: include_str!("shaders/common/triangles.wgsl"),
 };
 
+/// `shaders/common/light_depth.wgsl`: a light view's uniform, the scene's buffers and the
+/// vertex shader of every hardware-rasterized map (after [`TRIANGLES`]).
+pub const LIGHT_DEPTH: Common = Common {
+    name: "light_depth.wgsl",
+    source: include_str!("shaders/common/light_depth.wgsl"),
+};
+
 /// `shaders/common/map_compare.wgsl`: the receiver bias, texel size, cube face,
 /// nearest-texel and PCF comparisons the map look-ups share (after [`RAY_OFFSET`]).
 pub const MAP_COMPARE: Common = Common {

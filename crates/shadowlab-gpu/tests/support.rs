@@ -112,49 +112,95 @@ pub struct Verdict {
     pub errors: (f64, f64),
 }
 
-/// Judges `gpu` (a `gpu:` name) beside `cpu` on `set`, both with `params` (`key=value`):
-/// two GPU runs give the same bits; the GPU's mean error against a reference of `spp`
-/// samples a pixel is within [`ERROR_FACTOR`] of the CPU's or [`ERROR_ABS`]; and the
-/// image shows shadow (more than 50 pixels under one half), so the test means something.
-pub fn verdict(scene: &str, set: &Set, gpu: &str, cpu: &str, params: &[&str], spp: u32) -> Verdict {
-    use shadowlab::techniques::{self, Frame};
+/// How a GPU technique's mean error may stand against its CPU twin's.
+#[derive(Clone, Copy, PartialEq)]
+enum Bound {
+    /// Within [`ERROR_FACTOR`] of the twin's, or [`ERROR_ABS`], either way.
+    Within,
+    /// At most the twin's plus that margin; lower is allowed.
+    NoWorse,
+}
+
+/// What every verdict does on `frame`: `gpu` and `cpu` made with `params` (`key=value`),
+/// two GPU runs the same bits, their mean errors against `truth` held to `bound`, and (with
+/// `shows`) the image showing shadow (more than 50 pixels under one half), so the test
+/// means something.
+fn judge(
+    scene: &str,
+    frame: &shadowlab::techniques::Frame,
+    (gpu, cpu): (&str, &str),
+    params: &[&str],
+    truth: &shadowlab::frame::Visibility,
+    (bound, shows): (Bound, bool),
+) -> Verdict {
     shadowlab_gpu::register();
-    let (s, c, l, view) = (&set.0, &set.1, &set.2, &set.3);
-    let frame = Frame::new(s, c, l, view);
     let make = |name: &str| {
-        let mut t = techniques::create(name).unwrap();
+        let mut t = shadowlab::techniques::create(name).unwrap();
         for p in params {
             let (k, v) = p.split_once('=').unwrap();
             t.set_param(k, v).unwrap();
         }
         t
     };
-    let a = make(gpu).render(&frame).unwrap();
-    let b = make(gpu).render(&frame).unwrap();
+    let a = make(gpu).render(frame).unwrap();
+    let b = make(gpu).render(frame).unwrap();
     assert!(
         a.visibility.value == b.visibility.value,
         "{scene}: two runs of {gpu} differ"
     );
-    let cpu_shadows = make(cpu).render(&frame).unwrap();
-    let pattern =
-        shadowlab::sampling::pattern(shadowlab::sampling::PatternKind::Grid, spp).unwrap();
-    let reference = shadowlab::reference::Reference::build(s).visibility(&frame, &pattern);
-    let eg = shadowlab::compare::compare(view, &a.visibility, &reference).mean_abs_error;
-    let ec = shadowlab::compare::compare(view, &cpu_shadows.visibility, &reference).mean_abs_error;
-    assert!(
-        (eg - ec).abs() <= (ERROR_FACTOR * ec).max(ERROR_ABS),
-        "{scene}: {gpu}'s error {eg} against the reference is not within 10% of {cpu}'s {ec} (or {ERROR_ABS})"
-    );
-    let shadowed = a.visibility.value.iter().filter(|v| v.x < 0.5).count();
-    assert!(
-        shadowed > 50,
-        "{scene}: {gpu} has only {shadowed} shadowed pixels: the test shows nothing"
-    );
+    let cpu_shadows = make(cpu).render(frame).unwrap();
+    let view = frame.view;
+    let eg = shadowlab::compare::compare(view, &a.visibility, truth).mean_abs_error;
+    let ec = shadowlab::compare::compare(view, &cpu_shadows.visibility, truth).mean_abs_error;
+    let margin = (ERROR_FACTOR * ec).max(ERROR_ABS);
+    match bound {
+        Bound::Within => assert!(
+            (eg - ec).abs() <= margin,
+            "{scene}: {gpu}'s error {eg} against the reference is not within 10% of {cpu}'s {ec} (or {ERROR_ABS})"
+        ),
+        Bound::NoWorse => assert!(
+            eg <= ec + margin,
+            "{scene}: {gpu}'s error {eg} against the reference is above {cpu}'s {ec} by more than 10% (or {ERROR_ABS})"
+        ),
+    }
+    if shows {
+        let shadowed = a.visibility.value.iter().filter(|v| v.x < 0.5).count();
+        assert!(
+            shadowed > 50,
+            "{scene}: {gpu} has only {shadowed} shadowed pixels: the test shows nothing"
+        );
+    }
     Verdict {
         gpu: a.visibility.value,
         cpu: cpu_shadows.visibility.value,
         errors: (eg, ec),
     }
+}
+
+/// The reference of `set`'s frame at a grid of `spp` samples a pixel.
+fn grid_reference(set: &Set, spp: u32) -> shadowlab::frame::Visibility {
+    let (s, c, l, view) = (&set.0, &set.1, &set.2, &set.3);
+    let frame = shadowlab::techniques::Frame::new(s, c, l, view);
+    let pattern =
+        shadowlab::sampling::pattern(shadowlab::sampling::PatternKind::Grid, spp).unwrap();
+    shadowlab::reference::Reference::build(s).visibility(&frame, &pattern)
+}
+
+/// Judges `gpu` (a `gpu:` name) beside `cpu` on `set`, both with `params` (`key=value`):
+/// two GPU runs give the same bits; the GPU's mean error against a reference of `spp`
+/// samples a pixel is within [`ERROR_FACTOR`] of the CPU's or [`ERROR_ABS`]; and the
+/// image shows shadow (more than 50 pixels under one half), so the test means something.
+pub fn verdict(scene: &str, set: &Set, gpu: &str, cpu: &str, params: &[&str], spp: u32) -> Verdict {
+    let frame = shadowlab::techniques::Frame::new(&set.0, &set.1, &set.2, &set.3);
+    let truth = grid_reference(set, spp);
+    judge(
+        scene,
+        &frame,
+        (gpu, cpu),
+        params,
+        &truth,
+        (Bound::Within, true),
+    )
 }
 
 /// Judges `gpu` beside `cpu` under `scene`'s own area light (a built-in scene with one, at
@@ -168,42 +214,9 @@ pub fn soft_verdict(
     params: &[&str],
     samples: u32,
 ) -> (f64, f64) {
-    use shadowlab::techniques::{self, Frame};
-    shadowlab_gpu::register();
-    let (s, c, l, view) = builtin(scene, 128, 96, None);
-    let area = s.area_light.expect("a scene with an area light");
-    let frame = Frame::new(&s, &c, &l, &view).with_area(Some(&area), samples);
-    let make = |name: &str| {
-        let mut t = techniques::create(name).unwrap();
-        for p in params {
-            let (k, v) = p.split_once('=').unwrap();
-            t.set_param(k, v).unwrap();
-        }
-        t
-    };
-    let a = make(gpu).render(&frame).unwrap();
-    let b = make(gpu).render(&frame).unwrap();
-    assert!(
-        a.visibility.value == b.visibility.value,
-        "{scene}: two runs of {gpu} differ"
-    );
-    let cpu_shadows = make(cpu).render(&frame).unwrap();
-    let reference = shadowlab::reference::Reference::build(&s);
-    let truth = shadowlab::soft_reference::soft_visibility(
-        &reference,
-        &frame,
-        &area,
-        samples,
-        &[shadowlab::math::vec2(0.5, 0.5)],
-    );
-    let eg = shadowlab::compare::compare(&view, &a.visibility, &truth.visibility).mean_abs_error;
-    let ec = shadowlab::compare::compare(&view, &cpu_shadows.visibility, &truth.visibility)
-        .mean_abs_error;
-    assert!(
-        (eg - ec).abs() <= (ERROR_FACTOR * ec).max(ERROR_ABS),
-        "{scene}: {gpu}'s error {eg} against the soft reference is not within 10% of {cpu}'s {ec} (or {ERROR_ABS})"
-    );
-    (eg, ec)
+    let set = builtin(scene, 128, 96, None);
+    let area = set.0.area_light.expect("a scene with an area light");
+    area_judge(scene, &set, &area, (gpu, cpu), params, samples, false).errors
 }
 
 /// [`verdict`] with a one-sided bound, for a GPU technique built differently from its CPU
@@ -218,44 +231,16 @@ pub fn verdict_no_worse(
     params: &[&str],
     spp: u32,
 ) -> Verdict {
-    use shadowlab::techniques::{self, Frame};
-    shadowlab_gpu::register();
-    let (s, c, l, view) = (&set.0, &set.1, &set.2, &set.3);
-    let frame = Frame::new(s, c, l, view);
-    let make = |name: &str| {
-        let mut t = techniques::create(name).unwrap();
-        for p in params {
-            let (k, v) = p.split_once('=').unwrap();
-            t.set_param(k, v).unwrap();
-        }
-        t
-    };
-    let a = make(gpu).render(&frame).unwrap();
-    let b = make(gpu).render(&frame).unwrap();
-    assert!(
-        a.visibility.value == b.visibility.value,
-        "{scene}: two runs of {gpu} differ"
-    );
-    let cpu_shadows = make(cpu).render(&frame).unwrap();
-    let pattern =
-        shadowlab::sampling::pattern(shadowlab::sampling::PatternKind::Grid, spp).unwrap();
-    let reference = shadowlab::reference::Reference::build(s).visibility(&frame, &pattern);
-    let eg = shadowlab::compare::compare(view, &a.visibility, &reference).mean_abs_error;
-    let ec = shadowlab::compare::compare(view, &cpu_shadows.visibility, &reference).mean_abs_error;
-    assert!(
-        eg <= ec + (ERROR_FACTOR * ec).max(ERROR_ABS),
-        "{scene}: {gpu}'s error {eg} against the reference is above {cpu}'s {ec} by more than 10% (or {ERROR_ABS})"
-    );
-    let shadowed = a.visibility.value.iter().filter(|v| v.x < 0.5).count();
-    assert!(
-        shadowed > 50,
-        "{scene}: {gpu} has only {shadowed} shadowed pixels: the test shows nothing"
-    );
-    Verdict {
-        gpu: a.visibility.value,
-        cpu: cpu_shadows.visibility.value,
-        errors: (eg, ec),
-    }
+    let frame = shadowlab::techniques::Frame::new(&set.0, &set.1, &set.2, &set.3);
+    let truth = grid_reference(set, spp);
+    judge(
+        scene,
+        &frame,
+        (gpu, cpu),
+        params,
+        &truth,
+        (Bound::NoWorse, true),
+    )
 }
 
 /// [`verdict`] under `area`, the area light of `set`'s scene (whose stand-in `set`'s light
@@ -265,29 +250,25 @@ pub fn verdict_area(
     scene: &str,
     set: &Set,
     area: &shadowlab::area_light::AreaLight,
-    (gpu, cpu): (&str, &str),
+    pair: (&str, &str),
     params: &[&str],
     n_light: u32,
 ) -> Verdict {
-    use shadowlab::techniques::{self, Frame};
-    shadowlab_gpu::register();
+    area_judge(scene, set, area, pair, params, n_light, true)
+}
+
+/// [`judge`] under `area` against the soft reference of `n_light` light samples a pixel.
+fn area_judge(
+    scene: &str,
+    set: &Set,
+    area: &shadowlab::area_light::AreaLight,
+    pair: (&str, &str),
+    params: &[&str],
+    n_light: u32,
+    shows: bool,
+) -> Verdict {
     let (s, c, l, view) = (&set.0, &set.1, &set.2, &set.3);
-    let frame = Frame::new(s, c, l, view).with_area(Some(area), n_light);
-    let make = |name: &str| {
-        let mut t = techniques::create(name).unwrap();
-        for p in params {
-            let (k, v) = p.split_once('=').unwrap();
-            t.set_param(k, v).unwrap();
-        }
-        t
-    };
-    let a = make(gpu).render(&frame).unwrap();
-    let b = make(gpu).render(&frame).unwrap();
-    assert!(
-        a.visibility.value == b.visibility.value,
-        "{scene}: two runs of {gpu} differ"
-    );
-    let cpu_shadows = make(cpu).render(&frame).unwrap();
+    let frame = shadowlab::techniques::Frame::new(s, c, l, view).with_area(Some(area), n_light);
     let reference = shadowlab::soft_reference::soft_visibility(
         &shadowlab::reference::Reference::build(s),
         &frame,
@@ -295,21 +276,12 @@ pub fn verdict_area(
         n_light,
         &[shadowlab::math::vec2(0.5, 0.5)],
     );
-    let truth = &reference.visibility;
-    let eg = shadowlab::compare::compare(view, &a.visibility, truth).mean_abs_error;
-    let ec = shadowlab::compare::compare(view, &cpu_shadows.visibility, truth).mean_abs_error;
-    assert!(
-        (eg - ec).abs() <= (ERROR_FACTOR * ec).max(ERROR_ABS),
-        "{scene}: {gpu}'s error {eg} against the soft reference is not within 10% of {cpu}'s {ec} (or {ERROR_ABS})"
-    );
-    let shadowed = a.visibility.value.iter().filter(|v| v.x < 0.5).count();
-    assert!(
-        shadowed > 50,
-        "{scene}: {gpu} has only {shadowed} shadowed pixels: the test shows nothing"
-    );
-    Verdict {
-        gpu: a.visibility.value,
-        cpu: cpu_shadows.visibility.value,
-        errors: (eg, ec),
-    }
+    judge(
+        scene,
+        &frame,
+        pair,
+        params,
+        &reference.visibility,
+        (Bound::Within, shows),
+    )
 }

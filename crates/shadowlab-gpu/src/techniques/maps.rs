@@ -6,7 +6,7 @@
 
 use crate::compute::{pipeline, render_pipeline};
 use crate::device::{shared, Gpu};
-use crate::shader::{Stage, ALPHA_MASK, TRIANGLES};
+use crate::shader::{Stage, ALPHA_MASK, LIGHT_DEPTH, TRIANGLES};
 use crate::transfer::{grid, output, storage, uniform, Timer};
 use crate::upload::{SceneBuffers, SceneKey};
 use bytemuck::{Pod, Zeroable};
@@ -20,7 +20,7 @@ use std::sync::Arc;
 /// their light views through too.
 pub(crate) const DEPTH: Stage = Stage {
     name: "shadow_map/depth.wgsl",
-    common: &[ALPHA_MASK, TRIANGLES],
+    common: &[ALPHA_MASK, TRIANGLES, LIGHT_DEPTH],
     source: include_str!("shadow_map/depth.wgsl"),
 };
 

@@ -4,7 +4,7 @@
 use super::{Codec, Store};
 use crate::compute::{bind_entries, render_pipeline};
 use crate::device::Gpu;
-use crate::shader::{Stage, ALPHA_MASK, TRIANGLES};
+use crate::shader::{Stage, ALPHA_MASK, LIGHT_DEPTH, TRIANGLES};
 use crate::techniques::maps::{depth_scale, FaceU};
 use crate::transfer::{uniform, Timer};
 use crate::upload::SceneBuffers;
@@ -15,7 +15,7 @@ use shadowlab::techniques::Frame;
 
 const DEPTH: Stage = Stage {
     name: "filtering/depth.wgsl",
-    common: &[ALPHA_MASK, TRIANGLES],
+    common: &[ALPHA_MASK, TRIANGLES, LIGHT_DEPTH],
     source: include_str!("depth.wgsl"),
 };
 

@@ -4,45 +4,8 @@
 // `depth_scale`, written as the fragment's depth, so the nearest caster wins the hardware
 // depth test and the look-up compares linear depths as the CPU does. Alpha-masked
 // casters are discarded where their texture cuts them out, at the fragment's perspective-
-// correct barycentrics. Composed after shaders/common/{alpha_mask, triangles}.wgsl.
-
-struct FaceU {
-    clip_from_world: mat4x4<f32>,
-    light_from_world: mat4x4<f32>,
-    // Linear depths are divided by this before they are stored (the view's far plane).
-    depth_scale: f32,
-    // 1 when some material is alpha-masked.
-    masks: u32,
-    _pad0: u32,
-    _pad1: u32,
-}
-
-@group(0) @binding(0) var<uniform> face: FaceU;
-@group(0) @binding(1) var<storage, read> tris: array<f32>;
-@group(0) @binding(2) var<storage, read> tri_material: array<u32>;
-@group(0) @binding(3) var<storage, read> materials: array<MaterialU>;
-@group(0) @binding(4) var<storage, read> uvs: array<f32>;
-@group(0) @binding(5) var<storage, read> texels: array<u32>;
-
-struct Varyings {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) depth: f32,
-    @location(1) bary: vec3<f32>,
-    @location(2) @interpolate(flat) tri: u32,
-}
-
-@vertex
-fn vs(@builtin(vertex_index) vi: u32) -> Varyings {
-    let tri = vi / 3u;
-    let k = vi % 3u;
-    let p = vec4<f32>(vertex(tri, k), 1.0);
-    var out: Varyings;
-    out.clip = face.clip_from_world * p;
-    out.depth = -(face.light_from_world * p).z;
-    out.bary = vec3<f32>(f32(k == 0u), f32(k == 1u), f32(k == 2u));
-    out.tri = tri;
-    return out;
-}
+// correct barycentrics. Composed after shaders/common/{alpha_mask, triangles,
+// light_depth}.wgsl.
 
 @fragment
 fn fs(v: Varyings) -> @builtin(frag_depth) f32 {
