@@ -220,8 +220,19 @@ fn bench_engines_on_the_gpu_times_every_gpu_technique() {
         rows.iter()
             .any(|r| r["technique"] == n && r["frame_goal"].as_bool().unwrap_or(false) == goal)
     };
+    // Every GPU technique is measured at the budget, or said not to fit it (gpu:subpixel's
+    // facets take 288 bytes a pixel of the frame, over 4 MiB at 512×384), and timed for
+    // the frame goal.
     for &n in shadowlab_gpu::techniques::ALL {
-        assert!(ran(n, false) && ran(n, true), "{n}: {rows:?}");
+        let left_out = r
+            .stdout
+            .lines()
+            .any(|l| l.trim_start().starts_with(n) && l.contains("does not fit"));
+        assert!(
+            (ran(n, false) || left_out) && ran(n, true),
+            "{n}: {rows:?}\n{}",
+            r.stdout
+        );
     }
     for r in &rows {
         assert!(

@@ -100,7 +100,10 @@ def test_gpu_techniques_are_named_like_the_others():
     names = [r["technique"] for r in m["results"]]
     assert names[names.index("sm") + 1] == "gpu:sm"
     assert names[names.index("psm") + 1] == "gpu:psm"
-    assert {"gpu:lispsm", "gpu:cascaded", "gpu:raytrace"} <= set(names)
+    assert {
+        "gpu:lispsm", "gpu:cascaded", "gpu:raytrace", "gpu:afsm", "gpu:asm", "gpu:pcss",
+        "gpu:subpixel", "gpu:vsm", "gpu:evsm", "gpu:msm", "gpu:csm", "gpu:csm-soft",
+    } <= set(names)
 
 
 def test_nan_vertices_raise_the_library_sentence():
