@@ -211,6 +211,7 @@ impl ShadowTerm for GpuCascaded {
                 frame,
                 view,
                 stats,
+                &mut self.last_maps,
                 cpu.kernel,
                 cpu.resolution,
                 cpu.bias,

@@ -92,6 +92,7 @@ impl ShadowTerm for GpuLispsm {
                 frame,
                 view,
                 stats,
+                &mut self.last_maps,
                 c.kernel,
                 c.resolution,
                 c.bias,

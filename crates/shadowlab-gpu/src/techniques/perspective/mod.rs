@@ -273,6 +273,7 @@ impl ShadowTerm for GpuPsm {
                     frame,
                     view,
                     stats,
+                    &mut self.last_maps,
                     0,
                     c.resolution,
                     c.bias,

@@ -90,12 +90,13 @@ impl GpuShadowMap {
 
     /// The single map a warped or split map falls back to where its CPU twin does: `gpu:sm`
     /// (kernel 0) or `gpu:pcf` with these parameters, rendering `frame` over the uploaded
-    /// `view` into `stats` and counting `counter`.
+    /// `view` into `stats` and counting `counter`; its map is left in `maps` (for a viewer).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn fallback(
         frame: &Frame,
         view: &wgpu::Buffer,
         stats: &mut Stats,
+        maps: &mut Option<wgpu::Texture>,
         kernel: u32,
         resolution: u32,
         bias: f32,
@@ -114,6 +115,7 @@ impl GpuShadowMap {
             sm.set_param("kernel", &kernel.to_string())?;
         }
         let terms = sm.shadow_term(frame, view, stats)?;
+        *maps = sm.last_maps.take();
         stats.count(counter, 1.0);
         Ok(terms)
     }
