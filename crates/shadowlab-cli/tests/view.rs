@@ -504,7 +504,13 @@ fn the_panel_switches_technique_sets_a_parameter_and_shows_the_error() {
          click copy command line\n\
          click technique view\n\
          click view shadow map 0\n\
-         screenshot map.png\n",
+         screenshot map.png\n\
+         click gpu technique   # a map drawn on the device through another technique\n\
+         click gpu:cascaded\n\
+         click directional\n\
+         click technique view\n\
+         click view shadow map 3 # its farthest cascade, a layer of its texture array\n\
+         screenshot cascade.png\n",
     )
     .unwrap();
     let r = view(
@@ -578,6 +584,10 @@ fn the_panel_switches_technique_sets_a_parameter_and_shows_the_error() {
         }
     }
     assert!(levels.len() > 16, "the map shows depths: {levels:?}");
+    // gpu:cascaded leaves its four cascades on the device too, each a layer to show.
+    let (_, cj) = screenshot(&d, "cascade");
+    assert_eq!(arg_after(&cj, "--technique"), "gpu:cascaded");
+    widget_rect(&cj, "shadow map picture");
     // Without the overlay the view is render's image of the command line shown.
     assert_eq!(
         sm_off,
