@@ -78,6 +78,7 @@
 //! ties in table order.
 
 mod culling;
+mod dump;
 mod passes;
 mod pool;
 mod run;

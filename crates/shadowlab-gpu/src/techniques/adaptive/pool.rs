@@ -122,6 +122,11 @@ impl Pool {
         self.entry.iter().filter(|&&e| e != NO_ENTRY).count()
     }
 
+    /// The table entries of the resident pages, in slot order.
+    pub(super) fn entries(&self) -> impl Iterator<Item = u32> + '_ {
+        self.entry.iter().copied().filter(|&e| e != NO_ENTRY)
+    }
+
     /// Slots in the pool.
     pub(super) fn slots(&self) -> u32 {
         self.entry.len() as u32

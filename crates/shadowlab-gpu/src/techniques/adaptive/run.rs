@@ -312,6 +312,9 @@ impl ShadowTechnique for GpuAdaptive {
         stats.count("levels", f64::from(layout.levels));
         stats.count("hardware_raster", 1.0);
         stats.device = Some(gpu.adapter.label());
+        if frame.dumping() {
+            super::dump::write_dump(&layout, &st.pool, frame)?;
+        }
         Ok(Shadows::of_frame(frame, to_rgb(&raw), stats))
     }
 }

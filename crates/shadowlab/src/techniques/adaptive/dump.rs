@@ -11,8 +11,9 @@ use crate::raster::DepthBuffer;
 /// Side of the tree picture in pixels.
 const SIDE: u32 = 1024;
 
-/// Outline colours of the tree picture, by level.
-const LEVEL_COLOURS: [[u8; 3]; 6] = [
+/// Outline colours of the tree picture, by level below the root (`gpu:asm`'s page picture
+/// uses them too).
+pub const LEVEL_COLOURS: [[u8; 3]; 6] = [
     [70, 130, 255],
     [60, 200, 90],
     [240, 220, 60],
