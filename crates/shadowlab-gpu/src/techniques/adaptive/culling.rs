@@ -7,8 +7,8 @@
 use super::pool::{Layout, Page};
 use rayon::prelude::*;
 use shadowlab::light::LightView;
-use shadowlab::math::{ndc_to_uv, Vec4};
 use shadowlab::scene::Scene;
+use shadowlab::techniques::adaptive::clipped_uv_bounds;
 
 /// Every cell's triangles, concatenated: cell `c`'s are `triangles[first[c]..first[c + 1]]`.
 pub(super) struct Culling {
@@ -73,49 +73,6 @@ impl Culling {
     pub(super) fn bytes(&self) -> u64 {
         4 * (self.first.len() + self.triangles.len()) as u64
     }
-}
-
-/// The image rectangle `[u0, u1] × [v0, v1]` covered by the part of a triangle (clip-space
-/// vertices `c`) in front of the near plane, or `None` when no part is; clipped as the
-/// rasterizer clips (the library's `asm` culling does the same).
-fn clipped_uv_bounds(c: [Vec4; 3]) -> Option<[f32; 4]> {
-    if !c.iter().all(|c| c.is_finite()) {
-        return None;
-    }
-    let mut pts = [Vec4::ZERO; 4];
-    let mut k = 0;
-    for i in 0..3 {
-        let (a, b) = (c[i], c[(i + 1) % 3]);
-        if a.z >= 0.0 {
-            pts[k] = a;
-            k += 1;
-        }
-        if (a.z >= 0.0) != (b.z >= 0.0) {
-            let (i, o) = if a.z >= 0.0 { (a, b) } else { (b, a) };
-            pts[k] = i + (o - i) * (i.z / (i.z - o.z));
-            k += 1;
-        }
-    }
-    let mut r = [
-        f32::INFINITY,
-        f32::INFINITY,
-        f32::NEG_INFINITY,
-        f32::NEG_INFINITY,
-    ];
-    for p in &pts[..k] {
-        if p.w <= 0.0 {
-            // On the light's eye plane itself: unbounded.
-            return Some([
-                f32::NEG_INFINITY,
-                f32::NEG_INFINITY,
-                f32::INFINITY,
-                f32::INFINITY,
-            ]);
-        }
-        let (u, v) = ndc_to_uv(*p);
-        r = [r[0].min(u), r[1].min(v), r[2].max(u), r[3].max(v)];
-    }
-    (k >= 3).then_some(r)
 }
 
 #[cfg(test)]

@@ -48,8 +48,9 @@ impl Tree {
 
 /// The root-view image rectangle `[u0, u1] × [v0, v1]` covered by the part of a
 /// triangle (clip-space vertices `c`) in front of the near plane, or `None` when no part
-/// is; the clipping matches the rasterizer's, so the rectangle bounds what it covers.
-fn clipped_uv_bounds(c: [Vec4; 3]) -> Option<[f32; 4]> {
+/// is; the clipping matches the rasterizer's, so the rectangle bounds what it covers
+/// (`gpu:asm`'s culling lists use it too).
+pub fn clipped_uv_bounds(c: [Vec4; 3]) -> Option<[f32; 4]> {
     if !c.iter().all(|c| c.is_finite()) {
         return None;
     }

@@ -122,6 +122,7 @@ mod roots;
 mod test_scenes;
 mod tree;
 
+pub use culling::clipped_uv_bounds;
 pub use dump::LEVEL_COLOURS;
 pub use params::{
     DEFAULT_ANALYSIS_FRACTION, DEFAULT_BUDGET_MB, DEFAULT_CELLS, DEFAULT_COST_PER_TEXEL_NS,
