@@ -50,6 +50,42 @@ pub fn uniform<T: bytemuck::Pod>(gpu: &Gpu, what: &str, value: &T) -> wgpu::Buff
         })
 }
 
+/// The texture `t` (one mip, one layer) read back row by row, without the copy's padding.
+pub fn read_texture(gpu: &Gpu, t: &wgpu::Texture) -> Result<Vec<u8>> {
+    let texel = t.format().block_copy_size(None).unwrap_or(4);
+    let (w, h) = (t.width(), t.height());
+    let row = w * texel;
+    let padded =
+        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let size = u64::from(padded) * u64::from(h);
+    gpu.check_binding("a texture's read-back", size)?;
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("texture read-back"),
+        size,
+        usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_texture_to_buffer(
+        t.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(h),
+            },
+        },
+        t.size(),
+    );
+    gpu.queue.submit([encoder.finish()]);
+    let raw = read_back(gpu, &buffer, size)?;
+    Ok(raw
+        .chunks_exact(padded as usize)
+        .flat_map(|r| r[..row as usize].iter().copied())
+        .collect())
+}
+
 /// The first `bytes` bytes of `buffer` (which has `COPY_SRC` usage), copied to memory.
 pub fn read_back(gpu: &Gpu, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>> {
     let size = bytes.max(4).div_ceil(4) * 4;

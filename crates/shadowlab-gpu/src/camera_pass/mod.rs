@@ -14,7 +14,7 @@
 use crate::compute::render_pipeline;
 use crate::device::Gpu;
 use crate::shader::{Stage, ALPHA_MASK, RAY_OFFSET, TRIANGLES};
-use crate::transfer::{read_back, uniform, Timer};
+use crate::transfer::{read_texture, uniform, Timer};
 use crate::upload::SceneBuffers;
 use bytemuck::{Pod, Zeroable};
 use shadowlab::camera::Camera;
@@ -194,42 +194,6 @@ pub fn render(
         .collect::<Result<_>>()?;
     let gpu_ms = timer.read(gpu)?.first().map(|s| s.1);
     Ok(unpack(camera, &planes, gpu_ms))
-}
-
-/// The texture `t` (one mip, one layer) read back row by row, without the copy's padding.
-fn read_texture(gpu: &Gpu, t: &wgpu::Texture) -> Result<Vec<u8>> {
-    let texel = t.format().block_copy_size(None).unwrap_or(4);
-    let (w, h) = (t.width(), t.height());
-    let row = w * texel;
-    let padded =
-        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let size = u64::from(padded) * u64::from(h);
-    gpu.check_binding("the G-buffer's read-back", size)?;
-    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("gbuffer read-back"),
-        size,
-        usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    encoder.copy_texture_to_buffer(
-        t.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: Some(h),
-            },
-        },
-        t.size(),
-    );
-    gpu.queue.submit([encoder.finish()]);
-    let raw = read_back(gpu, &buffer, size)?;
-    Ok(raw
-        .chunks_exact(padded as usize)
-        .flat_map(|r| r[..row as usize].iter().copied())
-        .collect())
 }
 
 fn unpack(camera: &Camera, planes: &[Vec<u8>], gpu_ms: Option<f64>) -> GpuView {
