@@ -70,6 +70,28 @@ impl<T: ShadowTerm> OnDevice for T {
     }
 }
 
+/// `impl ShadowTechnique` for a [`ShadowTerm`] twin whose CPU technique is its field `cpu`:
+/// the name `$name`, the twin's parameters, and `render` as [`read_back`].
+macro_rules! device_twin {
+    ($t:ty, $name:expr) => {
+        impl shadowlab::techniques::ShadowTechnique for $t {
+            fn name(&self) -> &'static str {
+                $name
+            }
+
+            crate::twin::twin_params!(cpu);
+
+            fn render(
+                &mut self,
+                frame: &shadowlab::techniques::Frame,
+            ) -> shadowlab::error::Result<shadowlab::techniques::Shadows> {
+                crate::resident::read_back(self, frame)
+            }
+        }
+    };
+}
+pub(crate) use device_twin;
+
 /// [`ShadowTechnique::render`] through [`OnDevice::render_on_device`]: the view samples
 /// uploaded (stage `upload_view`, first), the shadow terms read back (`readback`, last).
 pub(crate) fn read_back(t: &mut dyn OnDevice, frame: &Frame) -> Result<Shadows> {

@@ -35,7 +35,7 @@ use shadowlab::error::Result;
 use shadowlab::light::{Light, LightView};
 use shadowlab::techniques::cascaded::{sdsm_interval, Cascaded, DepthBounds};
 use shadowlab::techniques::shadow_map::{check_light_map_size, check_resolution, pcf_slope_bias};
-use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Stats};
+use shadowlab::techniques::{Frame, Stats};
 use wgpu::util::DeviceExt;
 
 /// `gpu:cascaded`'s name.
@@ -185,17 +185,7 @@ fn depth_interval(
     Ok(sdsm_interval(frame, (lo, hi)))
 }
 
-impl ShadowTechnique for GpuCascaded {
-    fn name(&self) -> &'static str {
-        NAME
-    }
-
-    crate::twin::twin_params!(cpu);
-
-    fn render(&mut self, frame: &Frame) -> Result<Shadows> {
-        resident::read_back(self, frame)
-    }
-}
+resident::device_twin!(GpuCascaded, NAME);
 
 impl ShadowTerm for GpuCascaded {
     fn shadow_term(

@@ -26,7 +26,7 @@ use shadowlab::error::Result;
 use shadowlab::light::Light;
 use shadowlab::techniques::lispsm::LightSpacePerspective;
 use shadowlab::techniques::shadow_map::{check_light_map_size, check_resolution, pcf_slope_bias};
-use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Stats};
+use shadowlab::techniques::{Frame, Stats};
 
 /// `gpu:lispsm`'s name.
 pub const NAME: &str = "gpu:lispsm";
@@ -66,17 +66,7 @@ pub struct GpuLispsm {
     last_maps: Option<wgpu::Texture>,
 }
 
-impl ShadowTechnique for GpuLispsm {
-    fn name(&self) -> &'static str {
-        NAME
-    }
-
-    crate::twin::twin_params!(cpu);
-
-    fn render(&mut self, frame: &Frame) -> Result<Shadows> {
-        resident::read_back(self, frame)
-    }
-}
+resident::device_twin!(GpuLispsm, NAME);
 
 impl ShadowTerm for GpuLispsm {
     fn shadow_term(

@@ -36,8 +36,7 @@ use shadowlab::light::light_views;
 use shadowlab::techniques::filtering::blocker_search::grid_side;
 use shadowlab::techniques::pcss::{light_width, Pcss};
 use shadowlab::techniques::shadow_map::{check_resolution, DIRECTIONAL_PAD};
-use shadowlab::techniques::{Frame, ParamSpec, ShadowTechnique, Shadows, Stats};
-use std::collections::BTreeMap;
+use shadowlab::techniques::{Frame, Stats};
 
 /// `gpu:pcss`'s name.
 pub const NAME: &str = "gpu:pcss";
@@ -88,27 +87,7 @@ pub struct GpuPcss {
     last_maps: Option<wgpu::Texture>,
 }
 
-impl ShadowTechnique for GpuPcss {
-    fn name(&self) -> &'static str {
-        NAME
-    }
-
-    fn params(&self) -> BTreeMap<String, serde_json::Value> {
-        self.cpu.params()
-    }
-
-    fn param_specs(&self) -> Vec<ParamSpec> {
-        self.cpu.param_specs()
-    }
-
-    fn set_param(&mut self, key: &str, value: &str) -> Result<()> {
-        crate::twin::set_twin_param(NAME, &mut self.cpu, key, value)
-    }
-
-    fn render(&mut self, frame: &Frame) -> Result<Shadows> {
-        resident::read_back(self, frame)
-    }
-}
+resident::device_twin!(GpuPcss, NAME);
 
 impl ShadowTerm for GpuPcss {
     fn shadow_term(

@@ -38,7 +38,7 @@ use bytemuck::{Pod, Zeroable};
 use shadowlab::error::Result;
 use shadowlab::techniques::perspective::{Perspective, Plan, PostLight, Setup};
 use shadowlab::techniques::shadow_map::check_light_map_size;
-use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Stats};
+use shadowlab::techniques::{Frame, Stats};
 
 /// `gpu:psm`'s name.
 pub const NAME: &str = "gpu:psm";
@@ -242,17 +242,7 @@ impl GpuPsm {
     }
 }
 
-impl ShadowTechnique for GpuPsm {
-    fn name(&self) -> &'static str {
-        NAME
-    }
-
-    crate::twin::twin_params!(cpu);
-
-    fn render(&mut self, frame: &Frame) -> Result<Shadows> {
-        resident::read_back(self, frame)
-    }
-}
+resident::device_twin!(GpuPsm, NAME);
 
 impl ShadowTerm for GpuPsm {
     fn shadow_term(
