@@ -151,6 +151,16 @@ pub(crate) fn depth_array(
     }))
 }
 
+/// Counts the maps of `texture` (a [`depth_array`]) into `stats`: its bytes as the frame's
+/// memory (4 a texel) and its texels as `map_texels`.
+pub(crate) fn count_maps(stats: &mut Stats, texture: &wgpu::Texture) {
+    let texels = u64::from(texture.width())
+        * u64::from(texture.height())
+        * u64::from(texture.depth_or_array_layers());
+    stats.memory_bytes = texels * 4;
+    stats.count("map_texels", texels as f64);
+}
+
 /// Draws the scene once per layer of `texture` with `depth` (a stage whose bindings are
 /// a uniform, then the scene's triangles, materials, UVs and texels), layer `i` with the
 /// uniform `faces[i]`; the passes are timed as `shadow_map`.

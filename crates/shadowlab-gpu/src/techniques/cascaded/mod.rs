@@ -24,7 +24,7 @@
 //! a kernel), counted as `single_map_fallback`.
 
 use super::maps::{self, depth_scale, MapScene};
-use super::shadow_map::GpuShadowMap;
+use super::shadow_map::{Fallback, GpuShadowMap};
 use crate::compute::{bind, pipeline};
 use crate::resident::{self, ShadowTerm};
 use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
@@ -201,12 +201,14 @@ impl ShadowTerm for GpuCascaded {
                 frame,
                 view,
                 stats,
-                &mut self.last_maps,
-                cpu.kernel,
-                cpu.resolution,
-                cpu.bias,
-                cpu.slope_bias,
-                "single_map_fallback",
+                (&mut self.scene, &mut self.last_maps),
+                &Fallback {
+                    kernel: cpu.kernel,
+                    resolution: cpu.resolution,
+                    bias: cpu.bias,
+                    slope_bias: cpu.slope_bias,
+                    counter: "single_map_fallback",
+                },
             );
         };
         let res = check_resolution(NAME, cpu.resolved_cascade_resolution())?;
@@ -273,10 +275,9 @@ impl ShadowTerm for GpuCascaded {
             &mut timer,
             stats,
         )?;
-        stats.memory_bytes = u64::from(res).pow(2) * u64::from(layers) * 4;
+        maps::count_maps(stats, &texture);
         stats.count("cascades", f64::from(layers));
         stats.count("cascade_resolution", f64::from(res));
-        stats.count("map_texels", f64::from(res).powi(2) * f64::from(layers));
         self.last_maps = Some(texture);
         Ok(value)
     }

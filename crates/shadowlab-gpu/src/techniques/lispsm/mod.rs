@@ -16,7 +16,7 @@
 //! texel size at the receiver evaluated in f32 where the CPU uses f64.
 
 use super::maps::{self, depth_scale, MapScene};
-use super::shadow_map::GpuShadowMap;
+use super::shadow_map::{Fallback, GpuShadowMap};
 use crate::resident::{self, ShadowTerm};
 use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
 use crate::transfer::{uniform, Timer};
@@ -82,12 +82,14 @@ impl ShadowTerm for GpuLispsm {
                 frame,
                 view,
                 stats,
-                &mut self.last_maps,
-                c.kernel,
-                c.resolution,
-                c.bias,
-                c.slope_bias,
-                "single_map_fallback",
+                (&mut self.scene, &mut self.last_maps),
+                &Fallback {
+                    kernel: c.kernel,
+                    resolution: c.resolution,
+                    bias: c.bias,
+                    slope_bias: c.slope_bias,
+                    counter: "single_map_fallback",
+                },
             );
         };
         check_light_map_size(NAME, 1, res)?;
@@ -148,9 +150,8 @@ impl ShadowTerm for GpuLispsm {
             &mut timer,
             stats,
         )?;
-        stats.memory_bytes = u64::from(res).pow(2) * 4;
+        maps::count_maps(stats, &texture);
         stats.count("n", warp.n);
-        stats.count("map_texels", f64::from(res).powi(2));
         self.last_maps = Some(texture);
         Ok(value)
     }

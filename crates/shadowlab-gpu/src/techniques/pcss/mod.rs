@@ -176,8 +176,8 @@ impl ShadowTerm for GpuPcss {
         for (stage, ms) in timer.read(&gpu)? {
             stats.count(&format!("gpu_{stage}_ms"), ms);
         }
-        stats.memory_bytes = u64::from(side).pow(2) * u64::from(layers) * 4 + pyramid.bytes(layers);
-        stats.count("map_texels", f64::from(side).powi(2) * f64::from(layers));
+        maps::count_maps(stats, &map);
+        stats.memory_bytes += pyramid.bytes(layers);
         stats.count("hardware_raster", 1.0);
         stats.device = Some(gpu.adapter.label());
         self.last_maps = Some(map);

@@ -28,7 +28,7 @@
 //! monotonic rounding.
 
 use super::maps::{self, MapScene};
-use super::shadow_map::GpuShadowMap;
+use super::shadow_map::{Fallback, GpuShadowMap};
 use crate::compute::render_pipeline;
 use crate::resident::{self, ShadowTerm};
 use crate::shader::{Stage, ALPHA_MASK, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET, TRIANGLES};
@@ -225,8 +225,7 @@ impl GpuPsm {
             &mut timer,
             stats,
         )?;
-        stats.memory_bytes = u64::from(res).pow(2) * u64::from(layers) * 4;
-        stats.count("map_texels", f64::from(res).powi(2) * f64::from(layers));
+        maps::count_maps(stats, &texture);
         stats.count("maps", f64::from(layers));
         stats.count("inverted", f64::from(u8::from(inverted)));
         stats.count(
@@ -263,12 +262,14 @@ impl ShadowTerm for GpuPsm {
                     frame,
                     view,
                     stats,
-                    &mut self.last_maps,
-                    0,
-                    c.resolution,
-                    c.bias,
-                    c.slope_bias,
-                    "uniform_fallback",
+                    (&mut self.scene, &mut self.last_maps),
+                    &Fallback {
+                        kernel: 0,
+                        resolution: c.resolution,
+                        bias: c.bias,
+                        slope_bias: c.slope_bias,
+                        counter: "uniform_fallback",
+                    },
                 )
             }
             Plan::Maps(setup) => self.draw(frame, view, &setup, stats),

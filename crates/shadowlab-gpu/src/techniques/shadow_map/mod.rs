@@ -89,36 +89,46 @@ impl GpuShadowMap {
     }
 
     /// The single map a warped or split map falls back to where its CPU twin does: `gpu:sm`
-    /// (kernel 0) or `gpu:pcf` with these parameters, rendering `frame` over the uploaded
-    /// `view` into `stats` and counting `counter`; its map is left in `maps` (for a viewer).
-    #[allow(clippy::too_many_arguments)]
+    /// (kernel 0) or `gpu:pcf` with `f`'s parameters, rendering `frame` over the uploaded
+    /// `view` into `stats` and counting `f.counter`. It draws from the caller's own scene
+    /// on the device (`scene`, uploaded there when missing, so a fallback frame after frame
+    /// uploads it once) and leaves its map in `maps` (for a viewer).
     pub(crate) fn fallback(
         frame: &Frame,
         view: &wgpu::Buffer,
         stats: &mut Stats,
-        maps: &mut Option<wgpu::Texture>,
-        kernel: u32,
-        resolution: u32,
-        bias: f32,
-        slope_bias: f32,
-        counter: &str,
+        (scene, maps): (&mut Option<MapScene>, &mut Option<wgpu::Texture>),
+        f: &Fallback,
     ) -> Result<wgpu::Buffer> {
-        let mut sm = if kernel > 0 {
-            GpuShadowMap::pcf()
+        let (name, mut cpu) = if f.kernel > 0 {
+            (PCF, ShadowMap::pcf())
         } else {
-            GpuShadowMap::standard()
+            (SM, ShadowMap::standard())
         };
-        sm.set_param("resolution", &resolution.to_string())?;
-        sm.set_param("bias", &bias.to_string())?;
-        sm.set_param("slope-bias", &slope_bias.to_string())?;
-        if kernel > 0 {
-            sm.set_param("kernel", &kernel.to_string())?;
-        }
-        let terms = sm.shadow_term(frame, view, stats)?;
+        (cpu.resolution, cpu.bias, cpu.slope_bias) = (f.resolution, f.bias, f.slope_bias);
+        cpu.kernel = f.kernel;
+        let mut sm = GpuShadowMap {
+            name,
+            cpu,
+            scene: scene.take(),
+            last_maps: None,
+        };
+        let terms = sm.shadow_term(frame, view, stats);
+        *scene = sm.scene.take();
         *maps = sm.last_maps.take();
-        stats.count(counter, 1.0);
-        Ok(terms)
+        stats.count(f.counter, 1.0);
+        terms
     }
+}
+
+/// The parameters of a single-map fallback ([`GpuShadowMap::fallback`]): the twin's map,
+/// and the counter that says the frame fell back.
+pub(crate) struct Fallback {
+    pub(crate) kernel: u32,
+    pub(crate) resolution: u32,
+    pub(crate) bias: f32,
+    pub(crate) slope_bias: f32,
+    pub(crate) counter: &'static str,
 }
 
 impl ShadowTechnique for GpuShadowMap {
@@ -189,8 +199,7 @@ impl ShadowTerm for GpuShadowMap {
             &mut timer,
             stats,
         )?;
-        stats.memory_bytes = u64::from(res).pow(2) * u64::from(layers) * 4;
-        stats.count("map_texels", f64::from(res).powi(2) * f64::from(layers));
+        maps::count_maps(stats, &texture);
         self.last_maps = Some(texture);
         Ok(value)
     }
