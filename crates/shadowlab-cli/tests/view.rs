@@ -595,3 +595,150 @@ fn the_panel_switches_technique_sets_a_parameter_and_shows_the_error() {
         "gpu:sm at 256 as render draws it"
     );
 }
+
+#[test]
+fn the_panel_gives_the_light_an_area_as_render_does() {
+    let Some(x) = Xvfb::start() else {
+        eprintln!("skipping the viewer's area light: Xvfb is not installed (.ci/run installs it)");
+        return;
+    };
+    if !have_gpu("the viewer's area light") {
+        return;
+    }
+    let d = tmp("view-area");
+    // A point light, then a disk of the panel's size where it is: the same stand-in.
+    std::fs::write(
+        d.join("area.txt"),
+        "click point\n\
+         screenshot point.png\n\
+         click area            # a disk facing the scene's centre\n\
+         screenshot area.png\n\
+         wait-reference\n\
+         screenshot area-error.png\n\
+         click sun             # a directional light given a size\n\
+         screenshot sun.png\n\
+         click gpu technique   # traces punctual lights only: refused, as render refuses it\n\
+         click gpu:raytrace\n\
+         frames 1\n",
+    )
+    .unwrap();
+    let r = view(
+        &d,
+        Some(&x.display),
+        &[
+            "--scene",
+            "chessboard",
+            "--technique",
+            "raytrace",
+            "--light-samples",
+            "16",
+            "--width",
+            "160",
+            "--height",
+            "120",
+            "--script",
+            "area.txt",
+        ],
+    );
+    refused(&r, &["gpu:raytrace traces punctual lights only"]);
+    let (point, pj) = screenshot(&d, "point");
+    let (area, aj) = screenshot(&d, "area");
+    assert!(arg_after(&pj, "--light").starts_with("point:"), "{pj}");
+    assert!(arg_after(&aj, "--light").starts_with("disk:"), "{aj}");
+    assert_eq!(arg_after(&aj, "--light-samples"), "16");
+    let (point, area) = (view_of(&point, &pj), view_of(&area, &aj));
+    // The view is render's image of the command line shown, every pixel.
+    assert_eq!(area, reproduce(&d, &aj), "raytrace under the disk light");
+    // The penumbra: around each shadow's edge the hard shadow's pixels brighten (part of
+    // the disk is seen) and the lit ones beside it darken.
+    let (mut lighter, mut darker) = (0, 0);
+    for (a, p) in area.pixels().zip(point.pixels()) {
+        let sum = |p: &image::Rgb<u8>| p.0.iter().map(|&c| u32::from(c)).sum::<u32>();
+        let (a, p) = (sum(a), sum(p));
+        lighter += usize::from(a > p + 6);
+        darker += usize::from(a + 6 < p);
+    }
+    assert!(
+        lighter > 100 && darker > 100,
+        "a soft shadow: {lighter} pixels lighter and {darker} darker than under the point light"
+    );
+    // The reference is the soft one, as compare traces it: raytrace matches it exactly.
+    let (_, ej) = screenshot(&d, "area-error");
+    assert_eq!(ej["error"]["mismatch_rate"], 0.0, "{ej}");
+    assert_eq!(ej["error"]["mean_abs_error"], 0.0, "{ej}");
+    // A sun is a directional light given an angular size, as --light-size makes it.
+    let (sun, sj) = screenshot(&d, "sun");
+    assert!(
+        arg_after(&sj, "--light").starts_with("directional:"),
+        "{sj}"
+    );
+    assert_eq!(arg_after(&sj, "--light-size"), "2");
+    assert_same_outside_overlays("the sun", &sun, &sj, &reproduce(&d, &sj));
+}
+
+#[test]
+fn a_small_window_scrolls_the_panel_to_its_last_widget() {
+    let Some(x) = Xvfb::start() else {
+        eprintln!("skipping the viewer's scrolling: Xvfb is not installed (.ci/run installs it)");
+        return;
+    };
+    if !have_gpu("the viewer's scrolling") {
+        return;
+    }
+    let d = tmp("view-scroll");
+    std::fs::write(
+        d.join("scroll.txt"),
+        "screenshot top.png\n\
+         click technique view  # below the window's edge: scrolled to\n\
+         click view shadow map 0\n\
+         screenshot bottom.png\n",
+    )
+    .unwrap();
+    // A 480 × 360 window.
+    let r = view(
+        &d,
+        Some(&x.display),
+        &[
+            "--scene",
+            "chessboard",
+            "--technique",
+            "gpu:sm",
+            "--width",
+            "140",
+            "--height",
+            "360",
+            "--script",
+            "scroll.txt",
+        ],
+    );
+    support::ok(&r);
+    let (_, top) = screenshot(&d, "top");
+    let (bottom_img, bottom) = screenshot(&d, "bottom");
+    let seen = |shot: &Value, label: &str| {
+        shot["widgets"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w["name"] == label)
+    };
+    assert_eq!(bottom_img.height(), 360, "the window is 360 pixels high");
+    assert!(seen(&top, "cpu technique"), "{top}");
+    assert!(
+        !seen(&top, "technique view"),
+        "the panel is taller than the window: {top}"
+    );
+    assert!(
+        !seen(&bottom, "cpu technique"),
+        "the panel scrolled: {bottom}"
+    );
+    // The click reached the last widget: the map's picture is shown, inside the window.
+    let (x0, y0, x1, y1) = widget_rect(&bottom, "shadow map picture");
+    assert!(y1 <= 360 && y0 < y1, "{bottom}");
+    let mut levels = std::collections::BTreeSet::new();
+    for y in y0..y1 {
+        for x in x0..x1 {
+            levels.insert(bottom_img.get_pixel(x, y).0[0]);
+        }
+    }
+    assert!(levels.len() > 16, "the map shows depths: {levels:?}");
+}

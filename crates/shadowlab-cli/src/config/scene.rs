@@ -132,7 +132,17 @@ fn resolve_light(
         Some(l) => parse_light(l)?,
         None => (scene_light(scene, camera)?, scene.area_light),
     };
-    let Some(size) = args.light_size else {
+    size_light(light, area, args.light_size)
+}
+
+/// The light `(light, area)` given the size of `--light-size` when there is one: a
+/// punctual light becomes an area light ([`AreaLight::sized`]); an area light is refused.
+pub fn size_light(
+    light: Light,
+    area: Option<AreaLight>,
+    size: Option<f32>,
+) -> Result<(Light, Option<AreaLight>)> {
+    let Some(size) = size else {
         return Ok((light, area));
     };
     if let Some(a) = area {

@@ -82,6 +82,7 @@ pub struct App<'a> {
     pub(super) map_layers: u32,
     pub(super) map_view: Option<MapView>,
     pub(super) click_waits: usize,
+    pub(super) scroll_to: Option<String>,
     pub(super) dump: Option<(usize, egui::TextureHandle, [f32; 2])>,
     pub(super) clipboard: Option<arboard::Clipboard>,
     pub(super) cpu_names: Vec<String>,
@@ -123,6 +124,7 @@ impl<'a> App<'a> {
             map_layers: 0,
             map_view: None,
             click_waits: 0,
+            scroll_to: None,
             dump: None,
             clipboard: None,
             cpu_names: panel::cpu_names(),
@@ -296,12 +298,14 @@ impl<'a> App<'a> {
     }
 
     /// Whether the frame is drawn on the device: a technique that stays there, without
-    /// its own images or the layers behind semi-transparent surfaces (drawn on the CPU).
+    /// its own images, the layers behind semi-transparent surfaces or an area light (drawn
+    /// as `render` draws them, their error against the CPU's soft reference).
     pub(super) fn on_device_path(&self) -> bool {
         let s = &self.session;
         matches!(s.technique, Technique::Device(_))
             && !(s.show.overlays && s.show.dump.is_some())
             && !s.scene_args.layers
+            && s.area.is_none()
     }
 
     /// The frame drawn on the device or, for every other technique, as `render` draws it.
@@ -325,7 +329,7 @@ impl<'a> App<'a> {
                 let d = frame::draw(
                     s.scene,
                     &s.camera,
-                    &s.light,
+                    (&s.light, s.area.as_ref(), s.light_samples),
                     s.scene_args.layers,
                     &mut *s.technique,
                     dump,
@@ -375,8 +379,9 @@ impl<'a> App<'a> {
                 self.session.stale = true;
             }
             _ if self.requested != Some(key) => {
-                self.background
-                    .request(key, &d.camera, &self.session.light, &d.view);
+                let s = &self.session;
+                let light = (&s.light, s.area.as_ref(), s.light_samples);
+                self.background.request(key, &d.camera, light, &d.view);
                 self.requested = Some(key);
             }
             _ => {}

@@ -4,6 +4,7 @@
 //! their overlay is shown.
 
 use anyhow::{Context, Result};
+use shadowlab::area_light::AreaLight;
 use shadowlab::camera::Camera;
 use shadowlab::frame::{DumpMemory, Dumped, Frame};
 use shadowlab::light::Light;
@@ -82,14 +83,15 @@ pub fn camera_pass(
     Ok((camera, view, layer_samples, stages_ms))
 }
 
-/// Draws the frame of `camera` and `light` with `technique`; `layers` shades the surfaces
-/// behind semi-transparent ones too, `dump` keeps the technique's images. The camera
-/// pass of `previous` is kept when its camera is the same (the light or the technique
-/// changed): it depends on nothing else.
+/// Draws the frame of `camera` and `light` with `technique`: the light, its area light
+/// when it has one and the light samples a pixel under it, as `render` hands them to the
+/// technique; `layers` shades the surfaces behind semi-transparent ones too, `dump`
+/// keeps the technique's images. The camera pass of `previous` is kept when its camera
+/// is the same (the light or the technique changed): it depends on nothing else.
 pub fn draw(
     scene: &Scene,
     camera: &Camera,
-    light: &Light,
+    (light, area, light_samples): (&Light, Option<&AreaLight>, u32),
     layers: bool,
     technique: &mut dyn ShadowTechnique,
     dump: bool,
@@ -98,7 +100,7 @@ pub fn draw(
     let (camera, view, layer_samples, mut stages_ms) =
         camera_pass(scene, camera, layers, previous)?;
     let sink = DumpMemory::default();
-    let mut frame = Frame::new(scene, &camera, light, &view);
+    let mut frame = Frame::new(scene, &camera, light, &view).with_area(area, light_samples);
     if let Some(l) = &layer_samples {
         frame = frame.with_layers(l);
     }

@@ -12,6 +12,7 @@
 //! view (`capture`, `screenshot`, `reproduce`).
 
 mod app;
+mod area;
 mod benchmark;
 mod capture;
 mod fly;
@@ -63,7 +64,7 @@ pub fn run(cfg: ViewConfig) -> Result<()> {
         &cfg.setup.scene,
         &cfg.scene_args,
         cfg.setup.camera,
-        &cfg.setup.light,
+        (&cfg.setup.light, cfg.setup.area.as_ref()),
         &cfg.technique,
         cfg.params.clone(),
     )?;

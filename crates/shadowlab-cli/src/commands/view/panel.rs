@@ -3,19 +3,23 @@
 //! the session.
 
 use super::app::App;
+use super::area;
 use super::session::Session;
-use super::ui::{self, Action, LightKind, PanelState, Widgets};
+use super::ui::{self, Action, AreaShape, LightKind, PanelState, Widgets};
 use super::window::Painted;
+use shadowlab::area_light::AreaLight;
 use shadowlab::light::Light;
 use shadowlab::math::Vec3;
-use shadowlab::techniques::{self, SOFT_VARIANTS};
+use shadowlab::techniques::{self, EXACT_SOFT, SOFT_VARIANTS};
 use std::path::Path;
 
-/// The CPU picker's names: the library's techniques and their soft variants.
+/// The CPU picker's names: the library's techniques, their soft variants and the exact
+/// soft technique.
 pub fn cpu_names() -> Vec<String> {
     techniques::ALL
         .iter()
         .chain(SOFT_VARIANTS)
+        .chain([&EXACT_SOFT])
         .map(|n| n.to_string())
         .collect()
 }
@@ -28,14 +32,19 @@ pub fn gpu_names() -> Vec<String> {
         .collect()
 }
 
-/// The light's kind, its vector (towards the light, or its position) and a spot's angle.
-pub fn light_state(l: &Light) -> (LightKind, [f32; 3], f32) {
-    match *l {
+/// The light's kind, its vector (towards the light, or its position) and a spot's angle;
+/// an area light's kind is `Area` and its vector its stand-in's.
+pub fn light_state(l: &Light, area: Option<&AreaLight>) -> (LightKind, [f32; 3], f32) {
+    let (kind, v, angle) = match *l {
         Light::Directional { to_light } => (LightKind::Directional, to_light.to_array(), 0.0),
         Light::Point { position } => (LightKind::Point, position.to_array(), 0.0),
         Light::Spot {
             position, fov_deg, ..
         } => (LightKind::Spot, position.to_array(), fov_deg),
+    };
+    match area {
+        Some(_) => (LightKind::Area, v, angle),
+        None => (kind, v, angle),
     }
 }
 
@@ -54,7 +63,7 @@ fn of_kind(l: &Light, k: LightKind, centre: Vec3, diagonal: f32) -> Light {
         LightKind::Directional => Light::Directional {
             to_light: (position - centre).normalize(),
         },
-        LightKind::Point => Light::Point { position },
+        LightKind::Point | LightKind::Area => Light::Point { position },
         LightKind::Spot => Light::Spot {
             position,
             target: centre,
@@ -70,9 +79,33 @@ pub fn apply(s: &mut Session, a: Action) -> Option<Action> {
     match a {
         Action::Technique(n) => s.set_technique(&n),
         Action::Param(k, v) => s.set_param(&k, &v),
+        Action::LightKind(LightKind::Area) => {
+            // A disk where the light is, facing the scene's centre.
+            let size = area::default_size(AreaShape::Disk, s.scene);
+            let (l, a) = area::make(AreaShape::Disk, size, &s.light, s.scene);
+            s.set_area(l, a);
+        }
         Action::LightKind(k) => {
             let l = of_kind(&s.light, k, centre, diagonal);
             s.set_light(l);
+        }
+        Action::AreaShape(shape) => {
+            if let Some(a) = s.area {
+                let (was, size) = area::shape_of(&a);
+                let size = match (was == AreaShape::Sun, shape == AreaShape::Sun) {
+                    (false, false) => size,
+                    _ => area::default_size(shape, s.scene),
+                };
+                let (l, a) = area::make(shape, size, &s.light, s.scene);
+                s.set_area(l, a);
+            }
+        }
+        Action::AreaSize(size) => {
+            if let Some(a) = s.area {
+                let (shape, _) = area::shape_of(&a);
+                let (l, a) = area::make(shape, size, &s.light, s.scene);
+                s.set_area(l, a);
+            }
         }
         Action::LightVector(v) => {
             let v = Vec3::from_array(v);
@@ -90,7 +123,14 @@ pub fn apply(s: &mut Session, a: Action) -> Option<Action> {
                     fov_deg,
                 },
             };
-            s.set_light(l);
+            match s.area {
+                Some(a) => {
+                    let (shape, size) = area::shape_of(&a);
+                    let (l, a) = area::make(shape, size, &l, s.scene);
+                    s.set_area(l, a);
+                }
+                None => s.set_light(l),
+            }
         }
         Action::SpotAngle(a) => {
             if let Light::Spot {
@@ -149,11 +189,12 @@ impl App<'_> {
         let mut actions = Vec::new();
         let mut widgets = Widgets::default();
         let view_width = w.view_size.0;
+        let scroll_to = self.scroll_to.as_deref();
         let out = {
             let state = self.session.show.overlays.then(|| self.panel_state());
             ctx.run_pass(raw, |ctx| {
                 if let Some(state) = &state {
-                    (actions, widgets) = ui::panel(ctx, view_width, state, &mut fields);
+                    (actions, widgets) = ui::panel(ctx, view_width, state, &mut fields, scroll_to);
                 }
             })
         };
@@ -191,7 +232,13 @@ impl App<'_> {
                 "{} on the GPU, every frame drawn",
                 super::gpu_shade::REFERENCE
             ),
-            false => "the CPU reference, each new view".to_string(),
+            false => match s.area {
+                Some(_) => format!(
+                    "the CPU soft reference ({} light samples a pixel), each new view",
+                    s.light_samples
+                ),
+                None => "the CPU reference, each new view".to_string(),
+            },
         };
         let error = s.show.error.then(|| match &self.error {
             Some(e) => format!(
@@ -214,7 +261,10 @@ impl App<'_> {
             specs: s.technique.param_specs(),
             values: s.technique.params(),
             defaults,
-            light: light_state(&s.light),
+            light: light_state(&s.light, s.area.as_ref()),
+            area: s.area.as_ref().map(area::shape_of),
+            area_max: s.scene.bounds.diagonal() / 4.0,
+            light_samples: s.light_samples,
             backend: backend.to_string(),
             adapter: self.gpu.adapter.label(),
             history: &self.history,

@@ -87,18 +87,28 @@ impl App<'_> {
                     if needs_frame {
                         return true;
                     }
-                    let Some(at) = self.widgets.centre(label) else {
+                    // A widget not wholly seen (scrolled out of the panel) is scrolled to
+                    // first; one still cut after the frames waited is clicked where seen.
+                    let whole = !self.widgets.clipped(label);
+                    let found = self.widgets.centre(label);
+                    let waited = self.click_waits >= CLICK_WAIT_FRAMES;
+                    let Some(at) = found.filter(|_| whole || waited) else {
                         // A panel's first frame only measures itself, a list opens a
                         // frame after its click: a few frames are waited for.
-                        if self.click_waits < CLICK_WAIT_FRAMES {
+                        if !waited {
                             self.click_waits += 1;
+                            if self.widgets.clipped(label) {
+                                self.scroll_to = Some(label.clone());
+                            }
                             return true;
                         }
+                        self.scroll_to = None;
                         let e = no_widget(label, &self.widgets);
                         self.fail(event_loop, e);
                         return false;
                     };
                     self.click_waits = 0;
+                    self.scroll_to = None;
                     steps.pop_front();
                     steps.push_front(Step::Settle);
                     steps.push_front(Step::Release(at.x, at.y));

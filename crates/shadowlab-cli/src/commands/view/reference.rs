@@ -4,12 +4,14 @@
 //! only while the view is still the one it was traced for.
 
 use crate::config::plan::reference_spp_for;
+use shadowlab::area_light::AreaLight;
 use shadowlab::camera::Camera;
 use shadowlab::frame::{Frame, Visibility};
 use shadowlab::light::Light;
 use shadowlab::reference::Reference;
 use shadowlab::sampling::{pattern, PatternKind};
 use shadowlab::scene::Scene;
+use shadowlab::soft_reference::soft_visibility;
 use shadowlab::view::ViewSamples;
 use std::sync::{Condvar, Mutex, MutexGuard};
 use std::thread::{Scope, ScopedJoinHandle};
@@ -33,6 +35,8 @@ struct Request {
     key: Key,
     camera: Camera,
     light: Light,
+    area: Option<AreaLight>,
+    light_samples: u32,
     view: ViewSamples,
 }
 
@@ -74,10 +78,17 @@ impl Background {
             let mut reference: Option<Reference> = None;
             while let Some(req) = self.next_request() {
                 let r = reference.get_or_insert_with(|| Reference::build(scene));
-                let frame = Frame::new(scene, &req.camera, &req.light, &req.view);
+                let frame = Frame::new(scene, &req.camera, &req.light, &req.view)
+                    .with_area(req.area.as_ref(), req.light_samples);
                 let samples = pattern(PatternKind::Grid, req.key.spp)
                     .expect("the techniques' reference counts are valid");
-                let visibility = r.visibility(&frame, &samples);
+                // As `compare` traces it: under an area light the soft reference.
+                let visibility = match &req.area {
+                    Some(a) => {
+                        soft_visibility(r, &frame, a, req.light_samples, &samples).visibility
+                    }
+                    None => r.visibility(&frame, &samples),
+                };
                 self.lock().done = Some(Traced {
                     key: req.key,
                     visibility,
@@ -101,12 +112,21 @@ impl Background {
         }
     }
 
-    /// Asks for the reference of a view, replacing any request not yet started.
-    pub fn request(&self, key: Key, camera: &Camera, light: &Light, view: &ViewSamples) {
+    /// Asks for the reference of a view under `light` (its area light, when it has one,
+    /// and the light samples a pixel under it), replacing any request not yet started.
+    pub fn request(
+        &self,
+        key: Key,
+        camera: &Camera,
+        (light, area, light_samples): (&Light, Option<&AreaLight>, u32),
+        view: &ViewSamples,
+    ) {
         self.lock().request = Some(Request {
             key,
             camera: *camera,
             light: *light,
+            area: area.copied(),
+            light_samples,
             view: view.clone(),
         });
         self.wake.notify_all();

@@ -5,8 +5,9 @@
 //! the very same pixels.
 
 use crate::args::SceneArgs;
-use crate::config::scene::parse_light;
+use crate::config::scene::{parse_light, size_light};
 use anyhow::Result;
+use shadowlab::area_light::{AreaLight, DEFAULT_LIGHT_SAMPLES};
 use shadowlab::camera::{Camera, Projection};
 use shadowlab::light::Light;
 use shadowlab::math::Vec3;
@@ -46,14 +47,73 @@ pub fn as_rendered(l: &Light) -> Result<Light> {
     Ok(parse_light(&light_arg(l))?.0.normalized())
 }
 
+/// The `--light` value of an area light that `--light` can name (not a sun).
+fn area_arg(a: &AreaLight) -> Option<String> {
+    Some(match *a {
+        AreaLight::Rect {
+            centre,
+            edge_u,
+            edge_v,
+        } => format!(
+            "rect:{}:{}:{}",
+            vec3_arg(centre),
+            vec3_arg(edge_u),
+            vec3_arg(edge_v)
+        ),
+        AreaLight::Disk {
+            centre,
+            normal,
+            radius,
+        } => format!("disk:{}:{}:{radius}", vec3_arg(centre), vec3_arg(normal)),
+        AreaLight::Sphere { centre, radius } => format!("sphere:{}:{radius}", vec3_arg(centre)),
+        AreaLight::Distant { .. } => return None,
+    })
+}
+
+/// The `--light` value and the `--light-size` of a light `l` with its area light: an area
+/// light named by `--light` (its stand-in then its centre), a sun as a directional light
+/// given a size, a spot light given a size as that.
+pub fn light_args(l: &Light, area: Option<&AreaLight>) -> (String, Option<f32>) {
+    let Some(a) = area else {
+        return (light_arg(l), None);
+    };
+    match (*a, area_arg(a)) {
+        (
+            AreaLight::Distant {
+                to_light,
+                angle_deg,
+            },
+            _,
+        ) => (light_arg(&Light::Directional { to_light }), Some(angle_deg)),
+        (_, Some(text)) if a.punctual() == *l => (text, None),
+        (AreaLight::Disk { radius, .. }, _) if AreaLight::sized(l, radius).ok() == Some(*a) => {
+            (light_arg(l), Some(radius))
+        }
+        (_, text) => (text.unwrap_or_else(|| light_arg(l)), None),
+    }
+}
+
+/// The light and area light as `render --light` (and `--light-size`) read their text:
+/// what the viewer shows.
+pub fn as_rendered_area(l: &Light, area: Option<&AreaLight>) -> Result<(Light, Option<AreaLight>)> {
+    let (text, size) = light_args(l, area);
+    let (light, area) = parse_light(&text)?;
+    let (light, area) = size_light(light.normalized(), area, size)?;
+    Ok((light.normalized(), area))
+}
+
 /// What a view is made of, for its command line.
 pub struct ViewState<'a> {
     /// The scene flags as given (the window's size filled in).
     pub scene: &'a SceneArgs,
     /// The camera.
     pub camera: &'a Camera,
-    /// The light.
+    /// The light (an area light's stand-in).
     pub light: &'a Light,
+    /// The area light, when the light has an area.
+    pub area: Option<&'a AreaLight>,
+    /// Light samples per pixel under an area light.
+    pub light_samples: u32,
     /// The technique, as the command line spells it.
     pub technique: &'a str,
     /// Its parameters set by the user.
@@ -90,11 +150,16 @@ pub fn render_args(v: &ViewState, output: &Path) -> Vec<String> {
         v.camera.height.to_string(),
         "--camera".into(),
         camera_arg(v.camera),
-        "--light".into(),
-        light_arg(v.light),
-        "--technique".into(),
-        v.technique.to_string(),
     ]);
+    let (light, size) = light_args(v.light, v.area);
+    a.extend(["--light".into(), light]);
+    if let Some(size) = size {
+        a.extend(["--light-size".into(), size.to_string()]);
+    }
+    if v.area.is_some() && v.light_samples != DEFAULT_LIGHT_SAMPLES {
+        a.extend(["--light-samples".into(), v.light_samples.to_string()]);
+    }
+    a.extend(["--technique".into(), v.technique.to_string()]);
     if let Projection::Orthographic { ymag, .. } = v.camera.projection {
         a.extend(["--orthographic".into(), ymag.to_string()]);
     }
@@ -148,6 +213,44 @@ mod tests {
             let once = as_rendered(&l).unwrap();
             assert_eq!(as_rendered(&once).unwrap(), once);
             assert_eq!(light_arg(&once), light_arg(&as_rendered(&once).unwrap()));
+        }
+    }
+
+    #[test]
+    fn area_lights_read_back_as_they_are_written() {
+        let point = Light::Point {
+            position: vec3(1.0 / 3.0, 12.5, -7.125),
+        };
+        let spot = Light::Spot {
+            position: vec3(2.0, 9.0, 1.0 / 7.0),
+            target: vec3(0.0, 0.5, 0.0),
+            fov_deg: 37.3,
+        };
+        let sun = Light::Directional {
+            to_light: vec3(0.1, 0.7, -0.3).normalize(),
+        };
+        let disk = AreaLight::Disk {
+            centre: vec3(1.0 / 3.0, 12.5, -7.125),
+            normal: vec3(0.2, -1.0, 0.1).normalize(),
+            radius: 0.37,
+        };
+        let rect = AreaLight::Rect {
+            centre: vec3(1.0 / 3.0, 12.5, -7.125),
+            edge_u: vec3(0.7, 0.0, 0.1),
+            edge_v: vec3(0.0, 0.0, 1.0 / 3.0),
+        };
+        for (l, a, flag) in [
+            (disk.punctual(), disk, "disk:"),
+            (rect.punctual(), rect, "rect:"),
+            (point, AreaLight::sized(&point, 0.25).unwrap(), "sphere:"),
+            (spot, AreaLight::sized(&spot, 0.5).unwrap(), "spot:"),
+            (sun, AreaLight::sized(&sun, 1.5).unwrap(), "directional:"),
+        ] {
+            let (l1, a1) = as_rendered_area(&l, Some(&a)).unwrap();
+            let a1 = a1.expect("an area light reads back as one");
+            assert_eq!(as_rendered_area(&l1, Some(&a1)).unwrap(), (l1, Some(a1)));
+            assert!(light_args(&l1, Some(&a1)).0.starts_with(flag), "{a1:?}");
+            assert_eq!(a1.kind(), a.kind());
         }
     }
 

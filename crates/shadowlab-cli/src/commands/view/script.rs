@@ -12,13 +12,15 @@
 //!                       the overlays' rectangles, the widgets', and the `render` command
 //!                       line of the view
 //! click LABEL           click the panel's widget LABEL where the last frame drew it: the
-//!                       pointer's press, release and a frame for what it opened
+//!                       pointer's press, release and a frame for what it opened; a
+//!                       widget scrolled out of view is scrolled to first
 //! type TEXT             into the widget with the keyboard: select all, TEXT, Enter
 //! ```
 //!
 //! Labels: `cpu technique` and `gpu technique` (the pickers; once open, each technique by
 //! its name), each parameter's key (its field) and `KEY slider`, `KEY=WORD` in an open
-//! choice, `directional` `point` `spot`, `light x` `light y` `light z`, `error overlay`,
+//! choice, `directional` `point` `spot` `area` (then `disk` `rect` `sphere` `sun` and
+//! `area size`), `light x` `light y` `light z`, `error overlay`,
 //! `technique view` (then `view NAME`, `view shadow map N`, `view none`), `screenshot`,
 //! `copy command line`.
 

@@ -2,12 +2,13 @@
 //! technique with the parameters the user set, which overlays are on. Changes that need a
 //! new frame mark it `dirty`; those that only change the overlays mark it `stale`.
 
-use super::fly;
 use super::input::{Drag, Key, Move};
 use super::reproduce::{self, ViewState};
+use super::{area, fly};
 use crate::args::SceneArgs;
 use crate::config::parse::make_technique;
 use crate::failure;
+use shadowlab::area_light::AreaLight;
 use shadowlab::camera::Camera;
 use shadowlab::light::Light;
 use shadowlab::scene::Scene;
@@ -75,8 +76,13 @@ pub struct Session<'a> {
     pub scene_args: &'a SceneArgs,
     /// The camera (its depth range fitted when drawn).
     pub camera: Camera,
-    /// The light, as `render --light` reads it back.
+    /// The light, as `render --light` reads it back (an area light's stand-in: its
+    /// centre, as hard techniques see it).
     pub light: Light,
+    /// The area light, when the light has an area.
+    pub area: Option<AreaLight>,
+    /// Light samples per pixel under an area light (`--light-samples`).
+    pub light_samples: u32,
     /// The technique's name as the command line spells it.
     pub name: String,
     /// The technique.
@@ -102,21 +108,25 @@ pub struct Session<'a> {
 }
 
 impl<'a> Session<'a> {
-    /// The session at the start: `technique` with `params`, the setup's camera and light.
+    /// The session at the start: `technique` with `params`, the setup's camera and light
+    /// (with its area light, when it has one).
     pub fn new(
         scene: &'a Scene,
         scene_args: &'a SceneArgs,
         camera: Camera,
-        light: &Light,
+        (light, area): (&Light, Option<&AreaLight>),
         technique: &str,
         params: Vec<(String, String)>,
     ) -> anyhow::Result<Self> {
         let t = make(technique, &params)?;
+        let (light, area) = reproduce::as_rendered_area(light, area)?;
         Ok(Session {
             scene,
             scene_args,
             camera,
-            light: reproduce::as_rendered(light)?,
+            light,
+            area,
+            light_samples: scene_args.light_samples,
             name: technique.to_string(),
             technique: t,
             params: BTreeMap::from([(technique.to_string(), params)]),
@@ -147,6 +157,8 @@ impl<'a> Session<'a> {
             scene: self.scene_args,
             camera: &self.camera,
             light: &self.light,
+            area: self.area.as_ref(),
+            light_samples: self.light_samples,
             technique: &self.name,
             params: self.params(),
         }
@@ -196,10 +208,15 @@ impl<'a> Session<'a> {
             Drag::Look => fly::look(&mut self.camera, dx, dy),
             Drag::Light => {
                 let turned = fly::drag_light(&self.light, &self.camera, self.scene, dx, dy);
-                match reproduce::as_rendered(&turned) {
-                    Ok(l) => self.light = l,
-                    Err(e) => self.status = failure::sentence(&e),
+                match self.area {
+                    Some(a) => {
+                        let (shape, size) = area::shape_of(&a);
+                        let (l, a) = area::make(shape, size, &turned, self.scene);
+                        self.set_area(l, a);
+                    }
+                    None => self.set_light(turned),
                 }
+                return;
             }
         }
         self.moved();
@@ -251,11 +268,25 @@ impl<'a> Session<'a> {
         }
     }
 
-    /// Replaces the light by `l` as `render --light` reads it back.
+    /// Replaces the light by the punctual light `l` as `render --light` reads it back.
     pub fn set_light(&mut self, l: Light) {
         match reproduce::as_rendered(&l) {
             Ok(l) => {
                 self.light = l;
+                self.area = None;
+                self.moved();
+            }
+            Err(e) => self.status = failure::sentence(&e),
+        }
+    }
+
+    /// Replaces the light by the area light `a` with its stand-in `l`, as `render
+    /// --light` (and `--light-size`) read them back.
+    pub fn set_area(&mut self, l: Light, a: AreaLight) {
+        match reproduce::as_rendered_area(&l, Some(&a)) {
+            Ok((l, a)) => {
+                self.light = l;
+                self.area = a;
                 self.moved();
             }
             Err(e) => self.status = failure::sentence(&e),

@@ -1,17 +1,19 @@
 //! The panel, drawn with egui in the column right of the view: the technique (CPU and
 //! GPU pickers), every parameter of its table (slider or choice, and a field; the range,
-//! default and meaning as the tooltip), the light, the stage timings of the last frames,
+//! default and meaning as the tooltip), the light (punctual, or an area light's shape and
+//! size), the stage timings of the last frames,
 //! the adapter and who draws, the error against the reference, the technique's own
 //! images, screenshot and the command line.
 //!
 //! The panel does not change the session itself: it returns [`Action`]s, applied before
 //! the next frame is drawn. Every widget a person can use is recorded with its label and
 //! rectangle ([`Widgets`]), so that a script clicks a widget by its label in the last
-//! frame's layout, as a pointer would.
+//! frame's layout, as a pointer would. The panel scrolls when it is taller than the
+//! window; a script's click on a widget scrolled out of view scrolls to it first.
 
 use super::window::PANEL_WIDTH;
 use shadowlab::techniques::{param_text, ParamRange, ParamSpec};
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
 
 /// Frames of stage timings the plot shows.
 pub const HISTORY: usize = 120;
@@ -29,6 +31,11 @@ pub enum Action {
     LightVector([f32; 3]),
     /// The spot's opening angle in degrees.
     SpotAngle(f32),
+    /// The area light's shape.
+    AreaShape(AreaShape),
+    /// The area light's size: a radius or half a side in world units, a sun's angular
+    /// diameter in degrees.
+    AreaSize(f32),
     /// The error overlay on or off.
     Error(bool),
     /// The technique's image shown, by index; `None` for none.
@@ -50,13 +57,43 @@ pub enum LightKind {
     Point,
     /// From a point, within a cone.
     Spot,
+    /// From an area (its shape below).
+    Area,
+}
+
+/// An area light's shape, as the panel offers them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AreaShape {
+    /// A disk facing the scene's centre.
+    Disk,
+    /// A square facing the scene's centre.
+    Rect,
+    /// A sphere.
+    Sphere,
+    /// A light at infinity of some angular diameter.
+    Sun,
+}
+
+impl AreaShape {
+    /// The shapes, with their labels.
+    pub const ALL: [(AreaShape, &'static str); 4] = [
+        (AreaShape::Disk, "disk"),
+        (AreaShape::Rect, "rect"),
+        (AreaShape::Sphere, "sphere"),
+        (AreaShape::Sun, "sun"),
+    ];
 }
 
 /// The widgets drawn in a frame, by label.
 #[derive(Clone, Debug, Default)]
 pub struct Widgets {
-    /// Label and rectangle (pixels), in drawing order.
+    /// Label and rectangle (pixels), in drawing order: the part that can be seen.
     pub rects: Vec<(String, egui::Rect)>,
+    /// The labels of widgets drawn but cut at the top or bottom (scrolled out of the
+    /// panel, or out of an open list): a click scrolls to them first.
+    clipped: BTreeSet<String>,
+    /// The widget the panel scrolls to this frame.
+    scroll_to: Option<String>,
 }
 
 impl Widgets {
@@ -69,16 +106,36 @@ impl Widgets {
             .map(|(_, r)| r.center())
     }
 
-    /// The labels, for an error message.
+    /// Whether the widget labelled `label` was drawn cut at the top or bottom.
+    pub fn clipped(&self, label: &str) -> bool {
+        self.clipped.contains(label)
+    }
+
+    /// The labels, for an error message: those seen, then those scrolled out of view.
     pub fn labels(&self) -> Vec<String> {
-        self.rects.iter().map(|(l, _)| l.clone()).collect()
+        let seen = self.rects.iter().map(|(l, _)| l.clone());
+        let hidden = self
+            .clipped
+            .iter()
+            .filter(|l| !self.rects.iter().any(|(s, _)| s == *l))
+            .cloned();
+        seen.chain(hidden).collect()
     }
 
     fn add(&mut self, label: impl Into<String>, ui: &egui::Ui, r: &egui::Response) {
-        // Only what can be clicked: the part inside the visible clip area.
-        let vis = r.rect.intersect(ui.clip_rect());
+        let label = label.into();
+        if self.scroll_to.as_deref() == Some(label.as_str()) {
+            r.scroll_to_me(Some(egui::Align::Center));
+        }
+        // Only what can be clicked: the part inside the visible clip area. One cut at
+        // the top or bottom is scrolled out of view (not while egui measures the panel).
+        let clip = ui.clip_rect();
+        let vis = r.rect.intersect(clip);
+        if !ui.is_sizing_pass() && (r.rect.top() < clip.top() || r.rect.bottom() > clip.bottom()) {
+            self.clipped.insert(label.clone());
+        }
         if vis.is_positive() {
-            self.rects.push((label.into(), vis));
+            self.rects.push((label, vis));
         }
     }
 }
@@ -99,6 +156,12 @@ pub struct PanelState<'a> {
     pub defaults: BTreeMap<String, serde_json::Value>,
     /// The light's kind, vector and spot angle.
     pub light: (LightKind, [f32; 3], f32),
+    /// The area light's shape and size, when the light has an area.
+    pub area: Option<(AreaShape, f32)>,
+    /// The largest size of an area light in world units (the scene's size).
+    pub area_max: f32,
+    /// Light samples per pixel under an area light.
+    pub light_samples: u32,
     /// Who draws, whether the path reads back.
     pub backend: String,
     /// The adapter's line.
@@ -130,19 +193,24 @@ pub struct Fields {
     technique: String,
 }
 
-/// Draws the panel; returns the actions and the widgets by label.
+/// Draws the panel, scrolled to the widget labelled `scroll_to` when one is given;
+/// returns the actions and the widgets by label.
 pub fn panel(
     ctx: &egui::Context,
     view_width: u32,
     s: &PanelState,
     fields: &mut Fields,
+    scroll_to: Option<&str>,
 ) -> (Vec<Action>, Widgets) {
     if fields.technique != s.technique {
         fields.text.clear();
         fields.technique = s.technique.to_string();
     }
     let mut out = Vec::new();
-    let mut w = Widgets::default();
+    let mut w = Widgets {
+        scroll_to: scroll_to.map(str::to_string),
+        ..Widgets::default()
+    };
     let area = egui::Rect::from_min_size(
         egui::pos2(view_width as f32, 0.0),
         egui::vec2(PANEL_WIDTH as f32, ctx.content_rect().height()),
@@ -157,15 +225,21 @@ pub fn panel(
                 .show(ui, |ui| {
                     ui.set_width(area.width() - 12.0);
                     ui.set_min_height(area.height() - 12.0);
-                    egui::ScrollArea::vertical().show(ui, |ui| {
-                        technique(ui, s, &mut out, &mut w);
-                        params(ui, s, fields, &mut out, &mut w);
-                        error(ui, s, &mut out, &mut w);
-                        light(ui, s, &mut out, &mut w);
-                        actions(ui, s, &mut out, &mut w);
-                        views(ui, s, &mut out, &mut w);
-                        super::timings::timings(ui, s);
-                    });
+                    // The panel scrolls when it is taller than the window; a script's
+                    // click scrolls to its widget at once.
+                    egui::ScrollArea::vertical()
+                        .max_height(area.height() - 12.0)
+                        .auto_shrink(false)
+                        .animated(false)
+                        .show(ui, |ui| {
+                            technique(ui, s, &mut out, &mut w);
+                            params(ui, s, fields, &mut out, &mut w);
+                            error(ui, s, &mut out, &mut w);
+                            light(ui, s, &mut out, &mut w);
+                            actions(ui, s, &mut out, &mut w);
+                            views(ui, s, &mut out, &mut w);
+                            super::timings::timings(ui, s);
+                        });
                 });
         });
     (out, w)
@@ -326,6 +400,7 @@ fn light(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widge
             (LightKind::Directional, "directional"),
             (LightKind::Point, "point"),
             (LightKind::Spot, "spot"),
+            (LightKind::Area, "area"),
         ] {
             let r = ui.radio(kind == k, name);
             w.add(name, ui, &r);
@@ -334,10 +409,12 @@ fn light(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widge
             }
         }
     });
-    let what = if kind == LightKind::Directional {
-        "towards"
-    } else {
-        "at"
+    if let Some((shape, size)) = s.area {
+        area(ui, s, shape, size, out, w);
+    }
+    let what = match (kind, s.area) {
+        (_, Some((AreaShape::Sun, _))) | (LightKind::Directional, _) => "towards",
+        _ => "at",
     };
     ui.horizontal(|ui| {
         ui.label(what);
@@ -360,7 +437,45 @@ fn light(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widge
             out.push(Action::SpotAngle(a));
         }
     }
-    ui.label("area lights: not in the viewer (render --area-light)");
+}
+
+/// The area light's shape and size.
+fn area(
+    ui: &mut egui::Ui,
+    s: &PanelState,
+    shape: AreaShape,
+    size: f32,
+    out: &mut Vec<Action>,
+    w: &mut Widgets,
+) {
+    ui.horizontal(|ui| {
+        for (k, name) in AreaShape::ALL {
+            let r = ui.radio(shape == k, name);
+            w.add(name, ui, &r);
+            if r.clicked() && shape != k {
+                out.push(Action::AreaShape(k));
+            }
+        }
+    });
+    let (range, text) = match shape {
+        AreaShape::Sun => (0.05..=30.0, "angular diameter (degrees)"),
+        AreaShape::Rect => (s.area_max * 1e-3..=s.area_max, "half side"),
+        AreaShape::Disk | AreaShape::Sphere => (s.area_max * 1e-3..=s.area_max, "radius"),
+    };
+    let mut v = size;
+    let r = ui.add(
+        egui::Slider::new(&mut v, range)
+            .logarithmic(true)
+            .text(text),
+    );
+    w.add("area size", ui, &r);
+    if r.drag_stopped() || (r.changed() && !r.dragged()) {
+        out.push(Action::AreaSize(v));
+    }
+    ui.label(format!(
+        "{} light samples a pixel (--light-samples); hard techniques see its centre",
+        s.light_samples
+    ));
 }
 
 fn error(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut Widgets) {

@@ -16,8 +16,9 @@ use winit::window::Window;
 /// Width of the panel's column in pixels.
 pub const PANEL_WIDTH: u32 = 340;
 
-/// The least window height, so that the panel has room beside a small view.
-pub const MIN_HEIGHT: u32 = 720;
+/// The least window height, so that the panel has room beside a small view (it scrolls
+/// when it is taller than the window).
+pub const MIN_HEIGHT: u32 = 360;
 
 /// The view pass's uniform (`Blit` of `blit.wgsl`).
 #[repr(C)]
