@@ -9,15 +9,20 @@ use support::{have_gpu, verdict, verdict_sets};
 
 /// The share of covered pixels whose shadow terms may differ from the CPU twin's by more
 /// than one sample's share: the depth map is the hardware rasterizer's (the non-silhouette
-/// pixels' test and the hidden-silhouette test see its rounding, as `gpu:sm` does), and the
-/// GPU may fuse a facet's or a half-plane's products, which moves a sample lying on a
+/// pixels' test and the hidden-silhouette test see its rounding, as `gpu:sm` does), and a
+/// GPU may fuse a facet's or a half-plane's products, which can move a sample lying on a
 /// shadow edge, or a caster standing on the receiver across a crease test, to the other
-/// side now and then. Measured on lavapipe: bunny and the leaf 0, room 18 of 12288,
-/// chessboard (pieces standing on the board: many creases) 107 of 10880.
-const DIFFER_SHARE: f64 = 0.015;
+/// side. Measured on lavapipe: 0 pixels on every verdict scene, at 32 and at 128 samples;
+/// the allowance is for other adapters' rounding. (Before the work was cut into short
+/// invocations, chessboard had 107 such pixels at 32 samples and 216 at 128: the ground
+/// plane's pairs and a busy facet's last blockers were lost to llvmpipe's loop count.)
+const DIFFER_SHARE: f64 = 0.002;
 
-fn check(samples: u32) {
+fn check(samples: u32, only: Option<&str>) {
     for (name, set) in verdict_sets() {
+        if only.is_some_and(|o| o != name) {
+            continue;
+        }
         let p = format!("samples={samples}");
         let v = verdict(name, &set, "gpu:subpixel", "subpixel", &[&p], samples);
         let one = 1.0 / samples as f32 + 1e-6;
@@ -49,5 +54,16 @@ fn gpu_subpixel_matches_its_cpu_twin_at_32_samples() {
     if !have_gpu("gpu_subpixel_matches_its_cpu_twin_at_32_samples") {
         return;
     }
-    check(32);
+    check(32, None);
+}
+
+/// At 128 samples every word of the 128-bit masks is in use; chessboard's pieces stand on
+/// a board over a table plane larger than the light's map, whose pairs need the blocks of
+/// rows, and its facets over the finely tessellated pieces need the chunked evaluation.
+#[test]
+fn gpu_subpixel_matches_its_cpu_twin_at_128_samples_on_chessboard() {
+    if !have_gpu("gpu_subpixel_matches_its_cpu_twin_at_128_samples_on_chessboard") {
+        return;
+    }
+    check(128, Some("chessboard"));
 }

@@ -95,7 +95,8 @@ struct FacetU {
 @group(0) @binding(14) var<storage, read_write> sat: array<u32>;
 @group(0) @binding(15) var<storage, read_write> out: array<f32>;
 @group(0) @binding(16) var<storage, read_write> facets: array<FacetU>;
-// [facets, slots, pairs].
+// [facets, slots, pairs, the pairs pass's mode, blocks of large triangles, blocks
+// listed, evaluation items, items listed].
 @group(0) @binding(17) var<storage, read_write> counters: array<atomic<u32>>;
 // Per texel: the farthest facet depth bits over it (0: no facet).
 @group(0) @binding(18) var<storage, read_write> max_depth: array<atomic<u32>>;
@@ -108,6 +109,12 @@ struct FacetU {
 @group(0) @binding(22) var<storage, read_write> pairs: array<u32>;
 // Per pixel, the camera pass's depth.
 @group(0) @binding(23) var<storage, read_write> cam_depth: array<f32>;
+// The blocks of rows of the large triangles: (triangle-view pair, block).
+@group(0) @binding(25) var<storage, read_write> big: array<vec2<u32>>;
+// The visibility evaluation's items: (facet, texel slot + 1, chunk, 0).
+@group(0) @binding(26) var<storage, read_write> items: array<vec4<u32>>;
+// Per facet: its occlusion mask, then its validity mask (four words each).
+@group(0) @binding(27) var<storage, read_write> masks: array<atomic<u32>>;
 
 const VIEW_STRIDE: u32 = 10u;
 const NO_TRIANGLE: u32 = 0xffffffffu;

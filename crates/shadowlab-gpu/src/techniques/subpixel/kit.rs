@@ -58,6 +58,8 @@ const STAGES: &[(Stage, &[&str])] = &[
             "pixel_texels",
             "slots",
             "triangle_texels_main",
+            "list_mode",
+            "big_blocks",
             "scan_blocks",
             "scan",
             "scan_slots",
@@ -69,12 +71,12 @@ const STAGES: &[(Stage, &[&str])] = &[
             "visibility_evaluation.wgsl",
             include_str!("visibility_evaluation.wgsl"),
         ),
-        &["main"],
+        &["count_items", "list_items", "main", "finish"],
     ),
 ];
 
 /// Bindings of `bindings.wgsl`: 0 the frame's uniform, 3 the depth map, the rest storage.
-pub const BINDINGS: u32 = 25;
+pub const BINDINGS: u32 = 28;
 const UNIFORM_BINDING: u32 = 0;
 const MAP_BINDING: u32 = 3;
 

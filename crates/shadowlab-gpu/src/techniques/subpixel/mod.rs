@@ -21,6 +21,19 @@
 //! and count) and the scene's edge adjacency (`subpixel::edge_adjacency`, uploaded per
 //! scene).
 //!
+//! The work is cut so that no invocation loops long: a triangle whose texel rows exceed one
+//! block of about 32768 texels (a ground plane under the whole map) is rasterized against
+//! the pixels' texels by blocks of rows, one invocation each (`pairs.wgsl`, `big_blocks`),
+//! and the visibility evaluation runs one invocation per chunk of at most 64 triangles of
+//! one texel against one facet, ORing occlusion and ANDing validity into the facet's masks
+//! (`visibility_evaluation.wgsl`). Software adapters end every loop of an invocation once
+//! its loops together have turned 65535 times (Mesa llvmpipe's
+//! `LP_MAX_TGSI_LOOP_ITERATIONS`, one count for all the loops of a shader): one invocation
+//! a triangle lost the ground plane's pairs past that count, and one a facet lost the last
+//! blockers of a facet over a finely tessellated caster, both silently, as lit samples
+//! (chess pieces standing on the board were lighter at their bases). On a hardware GPU the
+//! same cut spreads a large triangle's or a busy facet's work over many threads.
+//!
 //! Departures from the CPU twin: the depth map is `gpu:sm`'s (hardware rasterization,
 //! depths over the far plane), so the non-silhouette pixels' depth-map test and the
 //! hidden-silhouette test see its rounding; the GPU's float arithmetic may contract
@@ -33,15 +46,16 @@
 //! list is sorted after the fill: every thread then meets its data in one order, so the
 //! result is the same bits on every run. A triangle met through several texels of a facet
 //! is evaluated once per texel (the CPU deduplicates; OR and AND make the mask the same).
-//! The counts of the triangle–texel pairs are scanned in blocks of 256 slots (a single
-//! invocation looping over every slot was seen to stop short on a software adapter), and
-//! the shaders index no array or vector by a variable where a loop can be unrolled into
-//! calls (a software adapter was seen to compile such indexing differently for different
-//! invocations).
+//! The counts of the triangle–texel pairs are scanned in blocks of 256 slots (for the loop
+//! count above), and the shaders index no array or vector by a variable where a loop can
+//! be unrolled into calls (a software adapter was seen to compile such indexing
+//! differently for different invocations).
 //!
 //! Counters: `samples`, `silhouette_pixels` (facets built, before the pixel–texel pairs
-//! send some back to the depth-map test), `tt_pairs`, `hardware_raster`, and the GPU time
-//! of each stage (`gpu_STAGE_ms`).
+//! send some back to the depth-map test), `tt_pairs`, `large_triangle_blocks` (the blocks
+//! of rows of triangles too large for one invocation), `evaluation_items` (chunks of a
+//! texel's triangles against a facet), `hardware_raster`, and the GPU time of each stage
+//! (`gpu_STAGE_ms`).
 
 mod kit;
 mod run;

@@ -171,10 +171,14 @@ fn dispatch(
     pass.dispatch_workgroups(gx, gy, 1);
 }
 
-/// Reads back the counters: facets, slots, pairs.
-fn counters(gpu: &Gpu, b: &wgpu::Buffer) -> Result<[u32; 4]> {
-    let raw = read_back(gpu, b, 16)?;
-    let mut c = [0u32; 4];
+/// The counters' words: facets, slots, pairs, the pairs pass's mode, blocks of large
+/// triangles, blocks listed, evaluation items, items listed.
+const COUNTERS: usize = 8;
+
+/// Reads back the counters.
+fn counters(gpu: &Gpu, b: &wgpu::Buffer) -> Result<[u32; COUNTERS]> {
+    let raw = read_back(gpu, b, 4 * COUNTERS as u64)?;
+    let mut c = [0u32; COUNTERS];
     for (i, w) in raw.chunks_exact(4).enumerate() {
         c[i] = u32::from_le_bytes([w[0], w[1], w[2], w[3]]);
     }
@@ -188,6 +192,8 @@ struct Buffers {
     fixed: [wgpu::Buffer; 3],
     rest: [wgpu::Buffer; 12],
     cam_depth: wgpu::Buffer,
+    /// Per facet, its occlusion and validity masks (binding 27).
+    masks: wgpu::Buffer,
 }
 
 fn frame_buffers(
@@ -224,7 +230,7 @@ fn frame_buffers(
         buf("the summed-area table", sat_side * sat_side * nv * 4)?,
         buf("the shadow terms", n * 12)?,
         buf("the facets", n * FACET_BYTES)?,
-        buf("the counters", 16)?,
+        buf("the counters", 4 * COUNTERS as u64)?,
         buf("the facets' texel depths", texels * 4)?,
         buf("the texel slots", texels * 4)?,
         buf("the slots' triangle counts", texels * 4)?,
@@ -235,17 +241,19 @@ fn frame_buffers(
         fixed,
         rest,
         cam_depth,
+        masks: buf("the facets' masks", n * 32)?,
     })
 }
 
-/// The frame's one bind group, with `pairs` at binding 22.
+/// The frame's bind group, with `pairs` at binding 22, the large triangles' blocks `big`
+/// at 25 and the evaluation's `items` at 26.
 fn bind_group(
     gpu: &Gpu,
     pipes: &Pipelines,
     r: &Resident,
     map_view: &wgpu::TextureView,
     b: &Buffers,
-    pairs: &wgpu::Buffer,
+    [pairs, big, items]: [&wgpu::Buffer; 3],
 ) -> wgpu::BindGroup {
     let s = &r.ms.scene;
     let mut list: Vec<wgpu::BindingResource> = vec![
@@ -264,6 +272,9 @@ fn bind_group(
     list.push(pairs.as_entire_binding());
     list.push(b.cam_depth.as_entire_binding());
     list.push(r.edges[1].as_entire_binding());
+    list.push(big.as_entire_binding());
+    list.push(items.as_entire_binding());
+    list.push(b.masks.as_entire_binding());
     debug_assert_eq!(list.len(), BINDINGS as usize);
     let entries: Vec<wgpu::BindGroupEntry> = list
         .into_iter()
@@ -324,9 +335,13 @@ pub fn run(
     let bufs = frame_buffers(&gpu, frame, &views, lut, &fu, texels, stats)?;
     let rest = &bufs.rest;
     let buf = |what: &str, bytes: u64| output(&gpu, what, bytes);
-    let group = |pairs: &wgpu::Buffer| bind_group(&gpu, &pipes, r, &map_view, &bufs, pairs);
-    let none = buf("the triangle-texel pairs", 4)?;
-    let first = group(&none);
+    let group = |pairs: &wgpu::Buffer, big: &wgpu::Buffer, items: &wgpu::Buffer| {
+        bind_group(&gpu, &pipes, r, &map_view, &bufs, [pairs, big, items])
+    };
+    let none = buf("no triangle-texel pairs yet", 4)?;
+    let no_blocks = buf("no blocks yet", 8)?;
+    let no_items = buf("no evaluation items yet", 16)?;
+    let first = group(&none, &no_blocks, &no_items);
     let counter_buf = &rest[7];
     let t = texels as u32;
     let edges = r.edge_count;
@@ -349,38 +364,68 @@ pub fn run(
     })??;
     let facets = found[0];
     let tris = frame.scene.len() as u32 * nv;
-    let paired = stats.stage("pt_tt_pairs", || {
-        gpu.stage(NAME, "pt_tt_pairs", || {
+    // Pixel–texel pairs, slots, and the triangle–texel pairs counted: those of the
+    // triangles within one block of rows first, the blocks of the others once listed.
+    let (paired, blocks) = stats.stage("pt_tt_pairs", || {
+        gpu.stage(NAME, "pt_tt_pairs", || -> Result<_> {
             let mut e = gpu.device.create_command_encoder(&Default::default());
             for step in [
                 ("pairs.wgsl", "pixel_texels", n),
                 ("pairs.wgsl", "slots", t),
                 ("pairs.wgsl", "triangle_texels_main", tris),
-                ("pairs.wgsl", "scan_blocks", t.div_ceil(256)),
-                ("pairs.wgsl", "scan", 1),
-                ("pairs.wgsl", "scan_slots", t.div_ceil(256)),
             ] {
                 dispatch(&mut e, &pipes, &first, step, row, &mut timer);
             }
             gpu.queue.submit([e.finish()]);
-            counters(&gpu, counter_buf)
+            let nb = counters(&gpu, counter_buf)?[4];
+            let blocks = buf("the large triangles' blocks", u64::from(nb).max(1) * 8)?;
+            let listing = group(&none, &blocks, &no_items);
+            let mut e = gpu.device.create_command_encoder(&Default::default());
+            for step in [
+                ("pairs.wgsl", "list_mode", 1),
+                ("pairs.wgsl", "triangle_texels_main", tris),
+                ("pairs.wgsl", "big_blocks", nb),
+                ("pairs.wgsl", "scan_blocks", t.div_ceil(256)),
+                ("pairs.wgsl", "scan", 1),
+                ("pairs.wgsl", "scan_slots", t.div_ceil(256)),
+            ] {
+                dispatch(&mut e, &pipes, &listing, step, row, &mut timer);
+            }
+            gpu.queue.submit([e.finish()]);
+            Ok((counters(&gpu, counter_buf)?, (blocks, nb)))
         })
     })??;
     let pairs = buf("the triangle-texel pairs", u64::from(paired[2]).max(1) * 4)?;
-    let second = group(&pairs);
-    stats.stage("shadow_calculation", || {
-        gpu.stage(NAME, "shadow_calculation", || {
+    let second = group(&pairs, &blocks.0, &no_items);
+    // The pairs filled and sorted, the evaluation's items counted, listed and evaluated,
+    // and each facet's term.
+    let items = stats.stage("shadow_calculation", || {
+        gpu.stage(NAME, "shadow_calculation", || -> Result<_> {
             let mut e = gpu.device.create_command_encoder(&Default::default());
             for step in [
                 ("pairs.wgsl", "triangle_texels_main", tris),
+                ("pairs.wgsl", "big_blocks", blocks.1),
                 ("pairs.wgsl", "sort_pairs", paired[1]),
-                ("visibility_evaluation.wgsl", "main", n),
+                ("visibility_evaluation.wgsl", "count_items", n),
             ] {
                 dispatch(&mut e, &pipes, &second, step, row, &mut timer);
             }
             gpu.queue.submit([e.finish()]);
+            let ni = counters(&gpu, counter_buf)?[6];
+            let items = buf("the evaluation's items", u64::from(ni).max(1) * 16)?;
+            let third = group(&pairs, &blocks.0, &items);
+            let mut e = gpu.device.create_command_encoder(&Default::default());
+            for step in [
+                ("visibility_evaluation.wgsl", "list_items", n),
+                ("visibility_evaluation.wgsl", "main", ni),
+                ("visibility_evaluation.wgsl", "finish", n),
+            ] {
+                dispatch(&mut e, &pipes, &third, step, row, &mut timer);
+            }
+            gpu.queue.submit([e.finish()]);
+            Ok(ni)
         })
-    })?;
+    })??;
     let raw = stats.stage("readback", || {
         gpu.stage(NAME, "readback", || {
             read_back(&gpu, &rest[5], u64::from(n) * 12)
@@ -392,11 +437,16 @@ pub fn run(
     stats.count("samples", lut.samples.len() as f64);
     stats.count("silhouette_pixels", f64::from(facets));
     stats.count("tt_pairs", f64::from(paired[2]));
+    stats.count("large_triangle_blocks", f64::from(blocks.1));
+    stats.count("evaluation_items", f64::from(items));
     stats.count("hardware_raster", 1.0);
     stats.memory_bytes = texels * 4 * 7
         + (u64::from(res) + 1).pow(2) * u64::from(nv) * 4
         + u64::from(n) * FACET_BYTES
-        + u64::from(paired[2]) * 4;
+        + u64::from(paired[2]) * 4
+        + u64::from(n) * 32
+        + u64::from(blocks.1) * 8
+        + u64::from(items) * 16;
     stats.device = Some(gpu.adapter.label());
     Ok(to_rgb(&raw))
 }

@@ -1,6 +1,7 @@
 // gpu:subpixel, stage `visibility_evaluation` (Pan et al. 2009, Section 3.4, Figures 6
-// and 7; the library's `blockers.rs` and `visibility_evaluation.rs`): one thread a facet.
-// Each triangle paired with the facet's texels becomes a blocker (the planes through its
+// and 7; the library's `blockers.rs` and `visibility_evaluation.rs`): one thread a chunk
+// of one texel's triangles against one facet (see CHUNK). Each triangle paired with the
+// facet's texels becomes a blocker (the planes through its
 // edges and the light, and its own plane), each plane a half-plane on the screen through
 // the facet's tangent plane, each half-plane a bitmask from the look-up table; their AND
 // is ORed into the occlusion mask. The validity mask drops samples beyond the line where
@@ -288,16 +289,23 @@ fn evaluate(fi: u32, tri: u32, acc: Masks) -> Masks {
     return r;
 }
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let fi = thread_index(gid);
-    if fi >= fr.pixels || facets[fi].alive == 0u {
-        return;
-    }
+// Work items: each is one texel slot's triangles, a chunk of at most CHUNK of them,
+// against one facet. Software adapters end every loop of an invocation once its loops
+// together have turned 65535 times (llvmpipe's LP_MAX_TGSI_LOOP_ITERATIONS), and a facet
+// over finely tessellated casters meets thousands of triangles: one invocation a facet
+// would lose the last of them. A chunk's evaluations stay far below that count (a few
+// dozen turns each, the samples of an alpha-masked blocker at most 128), and on a hardware
+// GPU the chunks spread a busy facet's work over many threads. Each item ORs its
+// occlusion into the facet's mask and ANDs its validity into the facet's, both order-free,
+// so the result does not depend on which item runs first.
+const CHUNK: u32 = 64u;
+
+// The items of facet `fi`: listed from `at` when `list`; returns their number.
+fn facet_items(fi: u32, list: bool, at: u32) -> u32 {
     let poly = facet_poly(fi);
     let base = facets[fi].view * fr.res * fr.res;
-    var acc = Masks(vec4<u32>(0u), facets[fi].valid & all_mask());
     let rows = row_range(poly);
+    var count = 0u;
     for (var y = rows.x; y <= rows.y && rows.x <= rows.y; y++) {
         let s = row_span(poly, rows, y);
         for (var x = s.x0; x <= s.x1 && s.some; x++) {
@@ -305,12 +313,82 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             if sl == 0u {
                 continue;
             }
-            for (var j = slot_start[sl - 1u]; j < slot_start[sl]; j++) {
-                acc = evaluate(fi, pairs[j], acc);
+            let chunks = (slot_start[sl] - slot_start[sl - 1u] + CHUNK - 1u) / CHUNK;
+            for (var c = 0u; c < chunks; c++) {
+                if list {
+                    items[at + count + c] = vec4<u32>(fi, sl, c, 0u);
+                }
             }
+            count += chunks;
         }
     }
-    let nv = ones(acc.valid);
-    let shadowed = ones(acc.occ & acc.valid);
-    write_out(facets[fi].k, 1.0 - f32(shadowed) / f32(nv));
+    return count;
+}
+
+// Per facet: its items counted (into counters[6]) and its masks set to no occlusion and
+// the facet's validity.
+@compute @workgroup_size(64)
+fn count_items(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let fi = thread_index(gid);
+    if fi >= fr.pixels || facets[fi].alive == 0u {
+        return;
+    }
+    atomicAdd(&counters[6], facet_items(fi, false, 0u));
+    let v = facets[fi].valid & all_mask();
+    atomicStore(&masks[fi * 8u], 0u);
+    atomicStore(&masks[fi * 8u + 1u], 0u);
+    atomicStore(&masks[fi * 8u + 2u], 0u);
+    atomicStore(&masks[fi * 8u + 3u], 0u);
+    atomicStore(&masks[fi * 8u + 4u], v.x);
+    atomicStore(&masks[fi * 8u + 5u], v.y);
+    atomicStore(&masks[fi * 8u + 6u], v.z);
+    atomicStore(&masks[fi * 8u + 7u], v.w);
+}
+
+// Per facet: its items listed.
+@compute @workgroup_size(64)
+fn list_items(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let fi = thread_index(gid);
+    if fi >= fr.pixels || facets[fi].alive == 0u {
+        return;
+    }
+    let n = facet_items(fi, false, 0u);
+    facet_items(fi, true, atomicAdd(&counters[7], n));
+}
+
+// Per item: its chunk of blockers evaluated against its facet.
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let e = thread_index(gid);
+    if e >= atomicLoad(&counters[6]) {
+        return;
+    }
+    let it = items[e];
+    let fi = it.x;
+    let first = slot_start[it.y - 1u] + it.z * CHUNK;
+    let last = min(slot_start[it.y], first + CHUNK);
+    var acc = Masks(vec4<u32>(0u), all_mask());
+    for (var j = first; j < last; j++) {
+        acc = evaluate(fi, pairs[j], acc);
+    }
+    atomicOr(&masks[fi * 8u], acc.occ.x);
+    atomicOr(&masks[fi * 8u + 1u], acc.occ.y);
+    atomicOr(&masks[fi * 8u + 2u], acc.occ.z);
+    atomicOr(&masks[fi * 8u + 3u], acc.occ.w);
+    atomicAnd(&masks[fi * 8u + 4u], acc.valid.x);
+    atomicAnd(&masks[fi * 8u + 5u], acc.valid.y);
+    atomicAnd(&masks[fi * 8u + 6u], acc.valid.z);
+    atomicAnd(&masks[fi * 8u + 7u], acc.valid.w);
+}
+
+// Per facet: Shadow = 1 − |occlusion ∩ valid| / |valid|.
+@compute @workgroup_size(64)
+fn finish(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let fi = thread_index(gid);
+    if fi >= fr.pixels || facets[fi].alive == 0u {
+        return;
+    }
+    let occ = vec4<u32>(atomicLoad(&masks[fi * 8u]), atomicLoad(&masks[fi * 8u + 1u]), atomicLoad(&masks[fi * 8u + 2u]), atomicLoad(&masks[fi * 8u + 3u]));
+    let valid = vec4<u32>(atomicLoad(&masks[fi * 8u + 4u]), atomicLoad(&masks[fi * 8u + 5u]), atomicLoad(&masks[fi * 8u + 6u]), atomicLoad(&masks[fi * 8u + 7u]));
+    write_out(facets[fi].k, 1.0 - f32(ones(occ & valid)) / f32(ones(valid)));
 }
