@@ -46,6 +46,15 @@
 //! Determinism: every pixel is written by one thread, and no result depends on the order
 //! threads run (no float atomics; order-independent integer reductions only).
 //!
+//! Bounded invocations: Mesa's llvmpipe (lavapipe, the CI adapter and the fallback on a
+//! machine without a GPU) ends every loop of an invocation, silently, once all the loops
+//! of that invocation (of the eight it runs together) have turned 65535 times in total
+//! (`LP_MAX_TGSI_LOOP_ITERATIONS`). A stage whose per-thread work grows with the scene (a
+//! triangle as large as the map, a texel under thousands of casters) must cut it into
+//! items of bounded size: `gpu:afsm`'s triangle–chunk work queue and `gpu:subpixel`'s
+//! blocks of rows and chunks of blockers do. It spreads the work over more threads on a
+//! hardware GPU too.
+//!
 //! The library creates these techniques by name once [`register`] has run (the command
 //! line and the Python module call it at start), so `gpu:NAME` works wherever a technique
 //! is named.

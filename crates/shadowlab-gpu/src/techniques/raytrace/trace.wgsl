@@ -106,8 +106,10 @@ fn first_hit(o: vec3<f32>, dir: vec3<f32>, t_max: f32, own: u32, after: i32, any
 
 // Semi-transparent casters gathered by one traversal: the GATHER lowest triangle indices
 // above `after` met along the segment, in increasing order, or `opaque` when an opaque
-// caster is met (the answer is then 0 whatever else lies on the segment).
-const GATHER: u32 = 16u;
+// caster is met (the answer is then 0 whatever else lies on the segment). Every further
+// GATHER casters cost one more traversal, and one invocation's loops may turn only 65535
+// times on llvmpipe: at 16 a shadow ray through hairball's hairs outran that count.
+const GATHER: u32 = 64u;
 
 struct Gathered {
     opaque: bool,
@@ -260,11 +262,18 @@ struct CameraU {
     // The library's gamma(7) and gamma(16), the error-bound factors of a hit point.
     gamma7: f32,
     gamma16: f32,
-    _pad: u32,
+    // This round's first sub-pixel position and how many it traces (see `supersample`).
+    first: u32,
+    round: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(0) @binding(10) var<storage, read> subpixel: array<vec2<f32>>;
 @group(0) @binding(11) var<uniform> cam: CameraU;
+// Per pixel, the sum so far of its sub-pixel rays' shadow terms (xyz) and their number (w).
+@group(0) @binding(12) var<storage, read_write> accum: array<vec4<f32>>;
 
 struct Ray {
     o: vec3<f32>,
@@ -356,6 +365,12 @@ fn facing_normal(tri: u32, d: vec3<f32>) -> vec3<f32> {
     return n;
 }
 
+// One round of the sub-pixel rays of every pixel: positions first..first + round of the
+// grid, added to the pixel's sum; the last round writes the mean (or, where no ray hit,
+// the camera pass sample's own term). The host runs as many rounds as it takes, one
+// position a round: Mesa's llvmpipe ends every loop of an invocation once its loops
+// together have turned 65535 times, which all of a pixel's rays through hairball's
+// semi-transparent hairs exceed.
 @compute @workgroup_size(64)
 fn supersample(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.y * params.row + gid.x;
@@ -364,17 +379,19 @@ fn supersample(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let b = k * VIEW_STRIDE;
     let own = bitcast<u32>(view[b + 9u]);
+    let done = cam.first + cam.round >= cam.spp;
     var v = vec3<f32>(1.0);
     if own != NO_TRIANGLE {
-        let p = vec3<f32>(view[b], view[b + 1u], view[b + 2u]);
-        let err = vec3<f32>(view[b + 3u], view[b + 4u], view[b + 5u]);
-        let n = vec3<f32>(view[b + 6u], view[b + 7u], view[b + 8u]);
-        let centre = transmittance(p, err, n, own);
         let px = f32(k % cam.width);
         let py = f32(k / cam.width);
-        var sum = vec3<f32>(0.0);
-        var count = 0u;
-        for (var i = 0u; i < cam.spp; i++) {
+        // The sum of the shadow terms of the sub-pixel rays that hit (xyz) and their
+        // number (w), over the rounds so far: one sum in sample order, as one loop would
+        // take it.
+        var acc = vec4<f32>(0.0);
+        if cam.first > 0u {
+            acc = accum[k];
+        }
+        for (var i = cam.first; i < min(cam.first + cam.round, cam.spp); i++) {
             let s = subpixel[i];
             let ray = primary_ray(px + s.x, py + s.y);
             let hit = closest_hit(ray.o, ray.d);
@@ -388,14 +405,23 @@ fn supersample(@builtin(global_invocation_id) gid: vec3<u32>) {
             let mag = abs(v0) + abs(v1) + abs(v2);
             let vmag = max(max(abs(vertex(hit.tri, 0u)), abs(vertex(hit.tri, 1u))), abs(vertex(hit.tri, 2u)));
             let herr = mag * cam.gamma7 + vmag * cam.gamma16;
-            sum += transmittance(hp, herr, facing_normal(hit.tri, ray.d), hit.tri);
-            count += 1u;
+            acc = vec4<f32>(acc.xyz + transmittance(hp, herr, facing_normal(hit.tri, ray.d), hit.tri), acc.w + 1.0);
         }
-        if count == 0u {
-            v = centre;
+        if !done {
+            accum[k] = acc;
+            return;
+        }
+        if acc.w == 0.0 {
+            let p = vec3<f32>(view[b], view[b + 1u], view[b + 2u]);
+            let err = vec3<f32>(view[b + 3u], view[b + 4u], view[b + 5u]);
+            let n = vec3<f32>(view[b + 6u], view[b + 7u], view[b + 8u]);
+            v = transmittance(p, err, n, own);
         } else {
-            v = sum / f32(count);
+            v = acc.xyz / acc.w;
         }
+    }
+    if !done {
+        return;
     }
     out[k * 3u] = v.x;
     out[k * 3u + 1u] = v.y;
