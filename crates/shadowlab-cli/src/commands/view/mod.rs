@@ -21,6 +21,7 @@ mod gpu_shade;
 mod input;
 mod map_view;
 mod panel;
+mod param_widgets;
 mod play;
 mod reference;
 mod reproduce;

@@ -12,7 +12,7 @@
 //! window; a script's click on a widget scrolled out of view scrolls to it first.
 
 use super::window::PANEL_WIDTH;
-use shadowlab::techniques::{param_text, ParamRange, ParamSpec};
+use shadowlab::techniques::ParamSpec;
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 
 /// Frames of stage timings the plot shows.
@@ -122,7 +122,7 @@ impl Widgets {
         seen.chain(hidden).collect()
     }
 
-    fn add(&mut self, label: impl Into<String>, ui: &egui::Ui, r: &egui::Response) {
+    pub(super) fn add(&mut self, label: impl Into<String>, ui: &egui::Ui, r: &egui::Response) {
         let label = label.into();
         if self.scroll_to.as_deref() == Some(label.as_str()) {
             r.scroll_to_me(Some(egui::Align::Center));
@@ -189,7 +189,7 @@ pub struct PanelState<'a> {
 /// The panel's own memory across frames: the text being typed into each field.
 #[derive(Default)]
 pub struct Fields {
-    text: BTreeMap<String, String>,
+    pub(super) text: BTreeMap<String, String>,
     technique: String,
 }
 
@@ -233,7 +233,7 @@ pub fn panel(
                         .animated(false)
                         .show(ui, |ui| {
                             technique(ui, s, &mut out, &mut w);
-                            params(ui, s, fields, &mut out, &mut w);
+                            super::param_widgets::params(ui, s, fields, &mut out, &mut w);
                             error(ui, s, &mut out, &mut w);
                             light(ui, s, &mut out, &mut w);
                             actions(ui, s, &mut out, &mut w);
@@ -272,122 +272,6 @@ fn technique(ui: &mut egui::Ui, s: &PanelState, out: &mut Vec<Action>, w: &mut W
             w.add(label, ui, &r.response);
             ui.label(label);
         });
-    }
-}
-
-/// The tooltip of a parameter: its meaning, range and default.
-fn tooltip(spec: &ParamSpec, default: Option<&serde_json::Value>) -> String {
-    let d = default.map(param_text).unwrap_or_default();
-    format!("{}\nrange {}, default {d}", spec.meaning, spec.range)
-}
-
-fn params(
-    ui: &mut egui::Ui,
-    s: &PanelState,
-    fields: &mut Fields,
-    out: &mut Vec<Action>,
-    w: &mut Widgets,
-) {
-    ui.separator();
-    ui.label("parameters");
-    if s.specs.is_empty() {
-        ui.label("(none)");
-    }
-    egui::Grid::new("params").num_columns(2).show(ui, |ui| {
-        for spec in &s.specs {
-            let value = s.values.get(spec.key).cloned().unwrap_or_default();
-            let tip = tooltip(spec, s.defaults.get(spec.key));
-            ui.label(spec.key).on_hover_text(&tip);
-            ui.horizontal(|ui| {
-                param(ui, spec, &value, &tip, fields, out, w);
-            });
-            ui.end_row();
-        }
-    });
-}
-
-fn param(
-    ui: &mut egui::Ui,
-    spec: &ParamSpec,
-    value: &serde_json::Value,
-    tip: &str,
-    fields: &mut Fields,
-    out: &mut Vec<Action>,
-    w: &mut Widgets,
-) {
-    let key = spec.key.to_string();
-    match spec.range {
-        ParamRange::Flag => {
-            let mut on = value.as_bool().unwrap_or(false);
-            let r = ui.checkbox(&mut on, "").on_hover_text(tip);
-            w.add(&key, ui, &r);
-            if r.changed() {
-                out.push(Action::Param(key, on.to_string()));
-            }
-        }
-        ParamRange::Choice(words) => {
-            let now = value.as_str().unwrap_or("").to_string();
-            let r = egui::ComboBox::from_id_salt(&key)
-                .selected_text(&now)
-                .show_ui(ui, |ui| {
-                    for word in words {
-                        let r = ui.selectable_label(*word == now, *word);
-                        w.add(format!("{key}={word}"), ui, &r);
-                        if r.clicked() && *word != now {
-                            out.push(Action::Param(key.clone(), word.to_string()));
-                        }
-                    }
-                });
-            w.add(&key, ui, &r.response.on_hover_text(tip));
-        }
-        ParamRange::Int(lo, hi) => {
-            let mut v = value.as_i64().unwrap_or(lo);
-            let r = ui.add(
-                egui::Slider::new(&mut v, lo..=hi)
-                    .logarithmic(lo >= 0 && hi > 1000)
-                    .show_value(false),
-            );
-            w.add(format!("{key} slider"), ui, &r);
-            if r.drag_stopped() || (r.changed() && !r.dragged()) {
-                out.push(Action::Param(key.clone(), v.to_string()));
-            }
-            field(ui, &key, value, tip, fields, out, w);
-        }
-        ParamRange::Real(lo, hi) => {
-            let mut v = value.as_f64().unwrap_or(lo);
-            let r = ui.add(egui::Slider::new(&mut v, lo..=hi).show_value(false));
-            w.add(format!("{key} slider"), ui, &r);
-            if r.drag_stopped() || (r.changed() && !r.dragged()) {
-                out.push(Action::Param(key.clone(), param_text(&v.into())));
-            }
-            field(ui, &key, value, tip, fields, out, w);
-        }
-    }
-}
-
-/// A text field for a number: applied on Enter.
-fn field(
-    ui: &mut egui::Ui,
-    key: &str,
-    value: &serde_json::Value,
-    tip: &str,
-    fields: &mut Fields,
-    out: &mut Vec<Action>,
-    w: &mut Widgets,
-) {
-    let text = fields
-        .text
-        .entry(key.to_string())
-        .or_insert_with(|| param_text(value));
-    let r = ui
-        .add(egui::TextEdit::singleline(text).desired_width(70.0))
-        .on_hover_text(tip);
-    w.add(key, ui, &r);
-    if r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
-        out.push(Action::Param(key.to_string(), text.trim().to_string()));
-    } else if !r.has_focus() {
-        // Shows the value in force (a refused one is replaced by it).
-        *text = param_text(value);
     }
 }
 

@@ -175,6 +175,23 @@ fn dispatch(
 /// triangles, blocks listed, evaluation items, items listed.
 const COUNTERS: usize = 8;
 
+/// Records `steps` (stage, entry, threads) over `group` in one command buffer and submits
+/// it.
+fn submit(
+    gpu: &Gpu,
+    pipes: &Pipelines,
+    group: &wgpu::BindGroup,
+    steps: &[(&str, &str, u32)],
+    row: u32,
+    timer: &mut Timer,
+) {
+    let mut e = gpu.device.create_command_encoder(&Default::default());
+    for step in steps {
+        dispatch(&mut e, pipes, group, *step, row, timer);
+    }
+    gpu.queue.submit([e.finish()]);
+}
+
 /// Reads back the counters.
 fn counters(gpu: &Gpu, b: &wgpu::Buffer) -> Result<[u32; COUNTERS]> {
     let raw = read_back(gpu, b, 4 * COUNTERS as u64)?;
@@ -348,17 +365,14 @@ pub fn run(
     // Silhouette edges, mask map, facets.
     let found = stats.stage("silhouette_mask_map", || {
         gpu.stage(NAME, "silhouette_mask_map", || {
-            let mut e = gpu.device.create_command_encoder(&Default::default());
-            for step in [
+            let steps = [
                 ("silhouette_edges.wgsl", "main", edges),
                 ("silhouette_mask_map.wgsl", "hidden", t),
                 ("silhouette_mask_map.wgsl", "sat_rows", res * nv),
                 ("silhouette_mask_map.wgsl", "sat_columns", res * nv),
                 ("facets.wgsl", "main", n),
-            ] {
-                dispatch(&mut e, &pipes, &first, step, row, &mut timer);
-            }
-            gpu.queue.submit([e.finish()]);
+            ];
+            submit(&gpu, &pipes, &first, &steps, row, &mut timer);
             counters(&gpu, counter_buf)
         })
     })??;
@@ -368,30 +382,24 @@ pub fn run(
     // triangles within one block of rows first, the blocks of the others once listed.
     let (paired, blocks) = stats.stage("pt_tt_pairs", || {
         gpu.stage(NAME, "pt_tt_pairs", || -> Result<_> {
-            let mut e = gpu.device.create_command_encoder(&Default::default());
-            for step in [
+            let steps = [
                 ("pairs.wgsl", "pixel_texels", n),
                 ("pairs.wgsl", "slots", t),
                 ("pairs.wgsl", "triangle_texels_main", tris),
-            ] {
-                dispatch(&mut e, &pipes, &first, step, row, &mut timer);
-            }
-            gpu.queue.submit([e.finish()]);
+            ];
+            submit(&gpu, &pipes, &first, &steps, row, &mut timer);
             let nb = counters(&gpu, counter_buf)?[4];
             let blocks = buf("the large triangles' blocks", u64::from(nb).max(1) * 8)?;
             let listing = group(&none, &blocks, &no_items);
-            let mut e = gpu.device.create_command_encoder(&Default::default());
-            for step in [
+            let steps = [
                 ("pairs.wgsl", "list_mode", 1),
                 ("pairs.wgsl", "triangle_texels_main", tris),
                 ("pairs.wgsl", "big_blocks", nb),
                 ("pairs.wgsl", "scan_blocks", t.div_ceil(256)),
                 ("pairs.wgsl", "scan", 1),
                 ("pairs.wgsl", "scan_slots", t.div_ceil(256)),
-            ] {
-                dispatch(&mut e, &pipes, &listing, step, row, &mut timer);
-            }
-            gpu.queue.submit([e.finish()]);
+            ];
+            submit(&gpu, &pipes, &listing, &steps, row, &mut timer);
             Ok((counters(&gpu, counter_buf)?, (blocks, nb)))
         })
     })??;
@@ -401,28 +409,22 @@ pub fn run(
     // and each facet's term.
     let items = stats.stage("shadow_calculation", || {
         gpu.stage(NAME, "shadow_calculation", || -> Result<_> {
-            let mut e = gpu.device.create_command_encoder(&Default::default());
-            for step in [
+            let steps = [
                 ("pairs.wgsl", "triangle_texels_main", tris),
                 ("pairs.wgsl", "big_blocks", blocks.1),
                 ("pairs.wgsl", "sort_pairs", paired[1]),
                 ("visibility_evaluation.wgsl", "count_items", n),
-            ] {
-                dispatch(&mut e, &pipes, &second, step, row, &mut timer);
-            }
-            gpu.queue.submit([e.finish()]);
+            ];
+            submit(&gpu, &pipes, &second, &steps, row, &mut timer);
             let ni = counters(&gpu, counter_buf)?[6];
             let items = buf("the evaluation's items", u64::from(ni).max(1) * 16)?;
             let third = group(&pairs, &blocks.0, &items);
-            let mut e = gpu.device.create_command_encoder(&Default::default());
-            for step in [
+            let steps = [
                 ("visibility_evaluation.wgsl", "list_items", n),
                 ("visibility_evaluation.wgsl", "main", ni),
                 ("visibility_evaluation.wgsl", "finish", n),
-            ] {
-                dispatch(&mut e, &pipes, &third, step, row, &mut timer);
-            }
-            gpu.queue.submit([e.finish()]);
+            ];
+            submit(&gpu, &pipes, &third, &steps, row, &mut timer);
             Ok(ni)
         })
     })??;
@@ -434,19 +436,28 @@ pub fn run(
     for (stage, ms) in timer.read(&gpu)? {
         stats.count(&format!("gpu_{stage}_ms"), ms);
     }
+    let sizes = [facets, paired[2], blocks.1, items];
+    count_stats(stats, lut, res, nv, n, sizes);
+    stats.device = Some(gpu.adapter.label());
+    Ok(to_rgb(&raw))
+}
+
+/// The frame's counters and memory: `sizes` are the facets built, the triangle–texel
+/// pairs, the large triangles' blocks and the evaluation's items.
+fn count_stats(stats: &mut Stats, lut: &LookupTable, res: u32, nv: u32, n: u32, sizes: [u32; 4]) {
+    let [facets, pairs, blocks, items] = sizes;
     stats.count("samples", lut.samples.len() as f64);
     stats.count("silhouette_pixels", f64::from(facets));
-    stats.count("tt_pairs", f64::from(paired[2]));
-    stats.count("large_triangle_blocks", f64::from(blocks.1));
+    stats.count("tt_pairs", f64::from(pairs));
+    stats.count("large_triangle_blocks", f64::from(blocks));
     stats.count("evaluation_items", f64::from(items));
     stats.count("hardware_raster", 1.0);
+    let texels = u64::from(res) * u64::from(res) * u64::from(nv);
     stats.memory_bytes = texels * 4 * 7
         + (u64::from(res) + 1).pow(2) * u64::from(nv) * 4
         + u64::from(n) * FACET_BYTES
-        + u64::from(paired[2]) * 4
+        + u64::from(pairs) * 4
         + u64::from(n) * 32
-        + u64::from(blocks.1) * 8
+        + u64::from(blocks) * 8
         + u64::from(items) * 16;
-    stats.device = Some(gpu.adapter.label());
-    Ok(to_rgb(&raw))
 }
