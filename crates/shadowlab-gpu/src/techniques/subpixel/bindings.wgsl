@@ -66,7 +66,8 @@ struct FacetU {
     valid: vec4<u32>,
     depth_max: f32,
     poly_n: u32,
-    _pad0: u32,
+    // The visibility evaluation's items over this facet (`count_items`).
+    items: u32,
     _pad1: u32,
     poly: array<vec4<f32>, 12>,
 }
@@ -113,7 +114,8 @@ struct FacetU {
 @group(0) @binding(25) var<storage, read_write> big: array<vec2<u32>>;
 // The visibility evaluation's items: (facet, texel slot + 1, chunk, 0).
 @group(0) @binding(26) var<storage, read_write> items: array<vec4<u32>>;
-// Per facet: its occlusion mask, then its validity mask (four words each).
+// Per facet: its occluded samples, then the samples a blocker made invalid (four words
+// each, ORed by the evaluation's items; zero at the start of the frame).
 @group(0) @binding(27) var<storage, read_write> masks: array<atomic<u32>>;
 
 const VIEW_STRIDE: u32 = 10u;

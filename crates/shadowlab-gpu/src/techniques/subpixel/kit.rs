@@ -63,7 +63,6 @@ const STAGES: &[(Stage, &[&str])] = &[
             "scan_blocks",
             "scan",
             "scan_slots",
-            "sort_pairs",
         ],
     ),
     (

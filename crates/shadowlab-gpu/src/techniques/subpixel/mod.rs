@@ -25,7 +25,7 @@
 //! block of about 32768 texels (a ground plane under the whole map) is rasterized against
 //! the pixels' texels by blocks of rows, one invocation each (`pairs.wgsl`, `big_blocks`),
 //! and the visibility evaluation runs one invocation per chunk of at most 64 triangles of
-//! one texel against one facet, ORing occlusion and ANDing validity into the facet's masks
+//! one texel against one facet, ORing the occluded and the invalidated samples into the facet's masks
 //! (`visibility_evaluation.wgsl`). Software adapters end every loop of an invocation once
 //! its loops together have turned 65535 times (Mesa llvmpipe's
 //! `LP_MAX_TGSI_LOOP_ITERATIONS`, one count for all the loops of a shader): one invocation
@@ -42,10 +42,12 @@
 //! sample that lies on a shadow edge to the other side now and then (a triangle is paired
 //! with a texel when it is nearer than the farthest facet there by a relative margin of
 //! 1e-5, so the rounding never drops a pair the CPU makes). Facets are stored at their
-//! pixel's index, texel slots are numbered by an atomic counter, and each slot's triangle
-//! list is sorted after the fill: every thread then meets its data in one order, so the
-//! result is the same bits on every run. A triangle met through several texels of a facet
-//! is evaluated once per texel (the CPU deduplicates; OR and AND make the mask the same).
+//! pixel's index, texel slots are numbered by an atomic counter and filled in whatever
+//! order the threads run; each chunk of a slot's triangles ORs its occlusion and its
+//! invalid samples into the facet's masks, so neither which chunk holds which triangle
+//! nor the order the chunks run changes a bit of the result. A triangle met through
+//! several texels of a facet is evaluated once per texel (the CPU deduplicates; OR and
+//! AND make the mask the same).
 //! The counts of the triangle–texel pairs are scanned in blocks of 256 slots (for the loop
 //! count above), and the shaders index no array or vector by a variable where a loop can
 //! be unrolled into calls (a software adapter was seen to compile such indexing

@@ -5,10 +5,9 @@
 // (`slots`); triangle–texel pairs, every triangle rasterized the same way against the
 // slotted texels it can be nearer than (a large one by blocks of rows, `big_blocks`),
 // counted per slot, the counts scanned into starts (`scan_blocks`, `scan`, `scan_slots`),
-// filled (`triangle_texels_main` and `big_blocks` again), and each slot's list sorted
-// (`sort_pairs`). Slot numbers vary from run to run; what a slot
-// holds, in its sorted order, does not. Composed after subpixel/{bindings,
-// rasterization}.wgsl.
+// filled (`triangle_texels_main` and `big_blocks` again). Slot numbers and the order of a
+// slot's triangles vary from run to run; what a slot holds does not, and the evaluation
+// does not depend on the order. Composed after subpixel/{bindings, rasterization}.wgsl.
 
 // A triangle pairs with a texel when it is nearer than the farthest facet there, by this
 // share of that depth more than the CPU asks: the GPU may round a facet's or a
@@ -221,26 +220,5 @@ fn scan_slots(@builtin(global_invocation_id) gid: vec3<u32>) {
         slot_start[s] = sum;
         sum += atomicLoad(&slot_fill[s]);
         atomicStore(&slot_fill[s], 0u);
-    }
-}
-
-// One thread a slot: its triangles sorted by index (insertion sort; a slot holds few), so
-// the evaluation meets them in one order whatever order the fill wrote them in.
-@compute @workgroup_size(64)
-fn sort_pairs(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let s = thread_index(gid);
-    if s >= atomicLoad(&counters[1]) {
-        return;
-    }
-    let a = slot_start[s];
-    let b = slot_start[s + 1u];
-    for (var i = a + 1u; i < b; i++) {
-        let t = pairs[i];
-        var j = i;
-        while j > a && pairs[j - 1u] > t {
-            pairs[j] = pairs[j - 1u];
-            j--;
-        }
-        pairs[j] = t;
     }
 }

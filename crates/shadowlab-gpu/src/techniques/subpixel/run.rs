@@ -405,14 +405,13 @@ pub fn run(
     })??;
     let pairs = buf("the triangle-texel pairs", u64::from(paired[2]).max(1) * 4)?;
     let second = group(&pairs, &blocks.0, &no_items);
-    // The pairs filled and sorted, the evaluation's items counted, listed and evaluated,
+    // The pairs filled, the evaluation's items counted, listed and evaluated,
     // and each facet's term.
     let items = stats.stage("shadow_calculation", || {
         gpu.stage(NAME, "shadow_calculation", || -> Result<_> {
             let steps = [
                 ("pairs.wgsl", "triangle_texels_main", tris),
                 ("pairs.wgsl", "big_blocks", blocks.1),
-                ("pairs.wgsl", "sort_pairs", paired[1]),
                 ("visibility_evaluation.wgsl", "count_items", n),
             ];
             submit(&gpu, &pipes, &second, &steps, row, &mut timer);

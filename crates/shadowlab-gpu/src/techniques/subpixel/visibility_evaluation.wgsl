@@ -296,8 +296,8 @@ fn evaluate(fi: u32, tri: u32, acc: Masks) -> Masks {
 // would lose the last of them. A chunk's evaluations stay far below that count (a few
 // dozen turns each, the samples of an alpha-masked blocker at most 128), and on a hardware
 // GPU the chunks spread a busy facet's work over many threads. Each item ORs its
-// occlusion into the facet's mask and ANDs its validity into the facet's, both order-free,
-// so the result does not depend on which item runs first.
+// occluded and its invalidated samples into the facet's masks, which is order-free, so
+// the result does not depend on which item runs first.
 const CHUNK: u32 = 64u;
 
 // The items of facet `fi`: listed from `at` when `list`; returns their number.
@@ -314,10 +314,8 @@ fn facet_items(fi: u32, list: bool, at: u32) -> u32 {
                 continue;
             }
             let chunks = (slot_start[sl] - slot_start[sl - 1u] + CHUNK - 1u) / CHUNK;
-            for (var c = 0u; c < chunks; c++) {
-                if list {
-                    items[at + count + c] = vec4<u32>(fi, sl, c, 0u);
-                }
+            for (var c = 0u; c < chunks && list; c++) {
+                items[at + count + c] = vec4<u32>(fi, sl, c, 0u);
             }
             count += chunks;
         }
@@ -325,24 +323,28 @@ fn facet_items(fi: u32, list: bool, at: u32) -> u32 {
     return count;
 }
 
-// Per facet: its items counted (into counters[6]) and its masks set to no occlusion and
-// the facet's validity.
+// Words `w`..`w + 3` of the facets' masks: ORed with `m`, or read.
+fn or_words(w: u32, m: vec4<u32>) {
+    atomicOr(&masks[w], m.x);
+    atomicOr(&masks[w + 1u], m.y);
+    atomicOr(&masks[w + 2u], m.z);
+    atomicOr(&masks[w + 3u], m.w);
+}
+
+fn words(w: u32) -> vec4<u32> {
+    return vec4<u32>(atomicLoad(&masks[w]), atomicLoad(&masks[w + 1u]), atomicLoad(&masks[w + 2u]), atomicLoad(&masks[w + 3u]));
+}
+
+// Per facet: its items counted, into counters[6] and the facet.
 @compute @workgroup_size(64)
 fn count_items(@builtin(global_invocation_id) gid: vec3<u32>) {
     let fi = thread_index(gid);
     if fi >= fr.pixels || facets[fi].alive == 0u {
         return;
     }
-    atomicAdd(&counters[6], facet_items(fi, false, 0u));
-    let v = facets[fi].valid & all_mask();
-    atomicStore(&masks[fi * 8u], 0u);
-    atomicStore(&masks[fi * 8u + 1u], 0u);
-    atomicStore(&masks[fi * 8u + 2u], 0u);
-    atomicStore(&masks[fi * 8u + 3u], 0u);
-    atomicStore(&masks[fi * 8u + 4u], v.x);
-    atomicStore(&masks[fi * 8u + 5u], v.y);
-    atomicStore(&masks[fi * 8u + 6u], v.z);
-    atomicStore(&masks[fi * 8u + 7u], v.w);
+    let n = facet_items(fi, false, 0u);
+    facets[fi].items = n;
+    atomicAdd(&counters[6], n);
 }
 
 // Per facet: its items listed.
@@ -352,11 +354,12 @@ fn list_items(@builtin(global_invocation_id) gid: vec3<u32>) {
     if fi >= fr.pixels || facets[fi].alive == 0u {
         return;
     }
-    let n = facet_items(fi, false, 0u);
+    let n = facets[fi].items;
     facet_items(fi, true, atomicAdd(&counters[7], n));
 }
 
-// Per item: its chunk of blockers evaluated against its facet.
+// Per item: its chunk of blockers evaluated against its facet, the occluded samples and
+// the samples made invalid ORed into the facet's masks.
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = thread_index(gid);
@@ -371,24 +374,18 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var j = first; j < last; j++) {
         acc = evaluate(fi, pairs[j], acc);
     }
-    atomicOr(&masks[fi * 8u], acc.occ.x);
-    atomicOr(&masks[fi * 8u + 1u], acc.occ.y);
-    atomicOr(&masks[fi * 8u + 2u], acc.occ.z);
-    atomicOr(&masks[fi * 8u + 3u], acc.occ.w);
-    atomicAnd(&masks[fi * 8u + 4u], acc.valid.x);
-    atomicAnd(&masks[fi * 8u + 5u], acc.valid.y);
-    atomicAnd(&masks[fi * 8u + 6u], acc.valid.z);
-    atomicAnd(&masks[fi * 8u + 7u], acc.valid.w);
+    or_words(fi * 8u, acc.occ);
+    or_words(fi * 8u + 4u, all_mask() & ~acc.valid);
 }
 
-// Per facet: Shadow = 1 − |occlusion ∩ valid| / |valid|.
+// Per facet: Shadow = 1 − |occlusion ∩ valid| / |valid|, valid being the facet's own
+// samples less those its items made invalid.
 @compute @workgroup_size(64)
 fn finish(@builtin(global_invocation_id) gid: vec3<u32>) {
     let fi = thread_index(gid);
     if fi >= fr.pixels || facets[fi].alive == 0u {
         return;
     }
-    let occ = vec4<u32>(atomicLoad(&masks[fi * 8u]), atomicLoad(&masks[fi * 8u + 1u]), atomicLoad(&masks[fi * 8u + 2u]), atomicLoad(&masks[fi * 8u + 3u]));
-    let valid = vec4<u32>(atomicLoad(&masks[fi * 8u + 4u]), atomicLoad(&masks[fi * 8u + 5u]), atomicLoad(&masks[fi * 8u + 6u]), atomicLoad(&masks[fi * 8u + 7u]));
-    write_out(facets[fi].k, 1.0 - f32(ones(occ & valid)) / f32(ones(valid)));
+    let valid = facets[fi].valid & all_mask() & ~words(fi * 8u + 4u);
+    write_out(facets[fi].k, 1.0 - f32(ones(words(fi * 8u) & valid)) / f32(ones(valid)));
 }
