@@ -14,9 +14,23 @@ use std::time::{Duration, Instant};
 /// The `shadowlab` binary under test.
 pub const SHADOWLAB: &str = env!("CARGO_BIN_EXE_shadowlab");
 
-/// `shadowlab` with no arguments yet.
+/// `shadowlab` with no arguments yet, given a private runtime folder so the Vulkan
+/// loader's and the window system's probes print nothing (a bare machine sets no
+/// `XDG_RUNTIME_DIR`, and lavapipe then says so on stderr beside the one sentence a test
+/// reads).
 pub fn shadowlab() -> Command {
-    Command::new(SHADOWLAB)
+    let runtime = std::env::temp_dir().join(format!(
+        "shadowlab-{}-{}-runtime",
+        env!("CARGO_CRATE_NAME"),
+        std::process::id()
+    ));
+    if std::fs::create_dir_all(&runtime).is_ok() {
+        use std::os::unix::fs::PermissionsExt;
+        let _ = std::fs::set_permissions(&runtime, std::fs::Permissions::from_mode(0o700));
+    }
+    let mut c = Command::new(SHADOWLAB);
+    c.env("XDG_RUNTIME_DIR", &runtime);
+    c
 }
 
 /// `shadowlab --quiet`: no progress bars or status lines.
