@@ -157,6 +157,17 @@ pub struct RenderArgs {
     /// Write the technique's intermediate images into this folder.
     #[arg(long)]
     pub dump: Option<PathBuf>,
+    /// The camera pass: `cpu`, the library's (every verdict's), or `gpu`, the GPU's own (a
+    /// hardware G-buffer made into the same samples on the device: the viewer's pass for a
+    /// `gpu:` technique). The GPU's coverage follows the rasterizer's rounding, so a few
+    /// edge pixels may see another triangle than the CPU's.
+    #[arg(
+        long = "camera-pass",
+        value_name = "cpu|gpu",
+        default_value = "cpu",
+        value_parser = ["cpu", "gpu"]
+    )]
+    pub camera_pass: String,
     /// Overwrite existing output files.
     #[arg(long)]
     pub force: bool,

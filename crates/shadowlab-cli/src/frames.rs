@@ -55,6 +55,36 @@ impl Pass {
         })
     }
 
+    /// Renders frame `i` of `setup` with the GPU's camera pass
+    /// ([`shadowlab_gpu::camera_pass::on_device`]), its samples read back.
+    pub fn render_on_gpu(setup: &Setup, i: usize) -> Result<Pass> {
+        let camera = setup.camera_at(i);
+        camera
+            .validate()
+            .with_context(|| format!("frame {i} of the camera path of {}", setup.scene.name))?;
+        let t0 = std::time::Instant::now();
+        let gpu = shadowlab_gpu::device::shared().map_err(|e| match e {
+            shadowlab::error::Error::Internal(m) => anyhow::anyhow!("the GPU camera pass: {m}"),
+            e => crate::failure::bad_input(format!("--camera-pass gpu needs a GPU and {e}")),
+        })?;
+        let scene = &setup.scene;
+        let buffers = shadowlab_gpu::upload::SceneBuffers::new(&gpu, scene)?;
+        let (on_device, _) =
+            shadowlab_gpu::camera_pass::on_device(&gpu, &buffers, scene.len(), &camera)?;
+        let mut view = shadowlab_gpu::camera_pass::read_view(&gpu, &on_device, &camera)?;
+        view.time_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let layers = if setup.layers {
+            Some(ViewLayers::render(scene, &camera, &view)?)
+        } else {
+            None
+        };
+        Ok(Pass {
+            camera,
+            view,
+            layers,
+        })
+    }
+
     /// Frame `index` of the pass, its intermediate images handed to `dump`.
     pub fn frame<'a>(
         &'a self,

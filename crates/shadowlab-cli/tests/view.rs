@@ -554,6 +554,8 @@ fn the_panel_switches_technique_sets_a_parameter_and_shows_the_error() {
     assert_eq!(aj["error_overlay"], true);
     assert_eq!(sj["error_overlay"], true);
     assert_eq!(sj_off["error_overlay"], false);
+    // gpu:sm draws on the GPU's own camera pass, and says so in its command line.
+    assert_eq!(arg_after(&sj_off, "--camera-pass"), "gpu");
     // The alias-free map is exact: no pixel differs from the reference, the overlay is
     // empty. A 256-texel shadow map is not: its overlay marks pixels, and only those.
     assert_eq!(aj["error"]["mismatch_rate"], 0.0, "{aj}");

@@ -10,8 +10,9 @@ use crate::device::{shared, Gpu};
 use crate::transfer::read_back as read_back_bytes;
 use crate::upload::view_buffer;
 use shadowlab::error::Result;
-use shadowlab::math::Vec3;
+use shadowlab::math::{Aabb, Vec3};
 use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Stats};
+use shadowlab::view::ViewSamples;
 use wgpu::util::DeviceExt;
 
 /// A frame's shadow term on the device.
@@ -23,13 +24,65 @@ pub struct DeviceShadows {
     pub stats: Stats,
 }
 
+/// The camera pass's samples on the device ([`crate::upload::VIEW_STRIDE`] floats a
+/// pixel, row-major from the top row) with the few numbers of them a technique needs on the
+/// CPU: the covered pixels' count and the bounds of their positions (the receivers a light
+/// view is fitted to). Made by uploading the library's camera pass ([`DeviceView::upload`])
+/// or by the GPU's own ([`crate::camera_pass::on_device`]), which reads back no more than
+/// those numbers.
+pub struct DeviceView {
+    /// The samples.
+    pub samples: wgpu::Buffer,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Covered pixels.
+    pub covered: u64,
+    /// Bounds of the covered pixels' positions ([`ViewSamples::receiver_bounds`]).
+    pub receivers: Aabb,
+    /// True when the samples are the library's camera pass uploaded, the one the frame's
+    /// `view` holds; false when the GPU formed them and the frame's `view` holds no
+    /// per-pixel data.
+    pub uploaded: bool,
+}
+
+impl DeviceView {
+    /// The library's camera pass `view`, uploaded.
+    pub fn upload(gpu: &Gpu, view: &ViewSamples) -> Result<Self> {
+        Ok(DeviceView {
+            samples: view_buffer(gpu, view)?,
+            width: view.width,
+            height: view.height,
+            covered: view.covered_count() as u64,
+            receivers: view.receiver_bounds(),
+            uploaded: true,
+        })
+    }
+
+    /// Pixels in the image.
+    pub fn pixels(&self) -> u32 {
+        self.width * self.height
+    }
+}
+
 /// A technique whose shadow term can stay on the device.
 pub trait OnDevice: ShadowTechnique {
     /// Renders `frame`'s shadow term into a device buffer without reading it back;
-    /// `view` holds the frame's camera-pass samples already uploaded
-    /// ([`crate::upload::view_buffer`]). Small control words (timestamps, a technique's
-    /// overflow flags) may still be read.
-    fn render_on_device(&mut self, frame: &Frame, view: &wgpu::Buffer) -> Result<DeviceShadows>;
+    /// `view` holds the frame's camera-pass samples on the device. Unless
+    /// [`OnDevice::needs_cpu_samples`], the technique reads nothing per pixel of
+    /// `frame.view` (which then holds no per-pixel data when `view` is the GPU's own
+    /// pass). Small control words (timestamps, a technique's overflow flags) may still be
+    /// read.
+    fn render_on_device(&mut self, frame: &Frame, view: &DeviceView) -> Result<DeviceShadows>;
+
+    /// True when the technique, as its parameters stand, reads the camera pass's samples
+    /// on the CPU too (a light fit over every visible point, samples traced from the
+    /// pixels): its frame's `view` must hold them, so it cannot run on a camera pass that
+    /// stayed on the device.
+    fn needs_cpu_samples(&self) -> bool {
+        false
+    }
 
     /// The last frame's depth maps, for a viewer to show: a `Depth32Float` array texture,
     /// one layer a light view, holding linear depth over the view's far plane. `None` for
@@ -48,9 +101,14 @@ pub(crate) trait ShadowTerm: ShadowTechnique {
     fn shadow_term(
         &mut self,
         frame: &Frame,
-        view: &wgpu::Buffer,
+        view: &DeviceView,
         stats: &mut Stats,
     ) -> Result<wgpu::Buffer>;
+
+    /// See [`OnDevice::needs_cpu_samples`].
+    fn cpu_samples(&self) -> bool {
+        false
+    }
 
     /// The last frame's depth maps ([`OnDevice::depth_maps`]).
     fn last_maps(&self) -> Option<&wgpu::Texture> {
@@ -59,10 +117,14 @@ pub(crate) trait ShadowTerm: ShadowTechnique {
 }
 
 impl<T: ShadowTerm> OnDevice for T {
-    fn render_on_device(&mut self, frame: &Frame, view: &wgpu::Buffer) -> Result<DeviceShadows> {
+    fn render_on_device(&mut self, frame: &Frame, view: &DeviceView) -> Result<DeviceShadows> {
         let mut stats = Stats::default();
         let visibility = self.shadow_term(frame, view, &mut stats)?;
         Ok(DeviceShadows { visibility, stats })
+    }
+
+    fn needs_cpu_samples(&self) -> bool {
+        self.cpu_samples()
     }
 
     fn depth_maps(&self) -> Option<&wgpu::Texture> {
@@ -98,7 +160,7 @@ pub(crate) fn read_back(t: &mut dyn OnDevice, frame: &Frame) -> Result<Shadows> 
     let gpu = shared()?;
     let name = t.name();
     let mut up = Stats::default();
-    let view = up.stage("upload_view", || view_buffer(&gpu, frame.view))?;
+    let view = up.stage("upload_view", || DeviceView::upload(&gpu, frame.view))?;
     let DeviceShadows {
         visibility,
         mut stats,

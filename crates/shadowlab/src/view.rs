@@ -235,6 +235,60 @@ impl ViewSamples {
         Ok(())
     }
 
+    /// The samples of a camera pass run elsewhere (the GPU's): `camera` and, row-major
+    /// from the top row, each pixel's triangle (or [`NO_TRIANGLE`]), position, its error
+    /// bound and the face normal turned to the camera, as [`ViewSamples::render_into`]
+    /// forms them. The view depth and the derivatives are formed here from those, as the
+    /// library's pass forms them. `None` when the arrays do not hold one entry a pixel.
+    pub fn from_samples(
+        camera: &Camera,
+        triangle: Vec<u32>,
+        position: Vec<Vec3>,
+        position_error: Vec<Vec3>,
+        normal: Vec<Vec3>,
+    ) -> Option<Self> {
+        let n = camera.width as usize * camera.height as usize;
+        if [
+            triangle.len(),
+            position.len(),
+            position_error.len(),
+            normal.len(),
+        ]
+        .iter()
+        .any(|&l| l != n)
+        {
+            return None;
+        }
+        let (eye, fwd, rays) = (camera.eye, camera.forward(), camera.rays());
+        let w = camera.width.max(1) as usize;
+        let per_pixel = |k: usize| {
+            if triangle[k] == NO_TRIANGLE {
+                return (f32::INFINITY, Vec3::ZERO, Vec3::ZERO);
+            }
+            let (p, nk) = (position[k], normal[k]);
+            let (cx, cy) = ((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
+            (
+                (p - eye).dot(fwd),
+                neighbour_offset(&rays, nk, p, cx + 1.0, cy),
+                neighbour_offset(&rays, nk, p, cx, cy + 1.0),
+            )
+        };
+        let derived: Vec<(f32, Vec3, Vec3)> = (0..n).into_par_iter().map(per_pixel).collect();
+        Some(ViewSamples {
+            width: camera.width,
+            height: camera.height,
+            triangle,
+            position,
+            position_error,
+            normal,
+            depth: derived.iter().map(|d| d.0).collect(),
+            dpdx: derived.iter().map(|d| d.1).collect(),
+            dpdy: derived.iter().map(|d| d.2).collect(),
+            camera: *camera,
+            time_ms: 0.0,
+        })
+    }
+
     /// Bytes of the per-pixel arrays the camera pass writes.
     pub fn bytes_per_pixel() -> usize {
         2 * std::mem::size_of::<u32>() + 5 * std::mem::size_of::<Vec3>()

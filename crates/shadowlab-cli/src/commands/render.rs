@@ -24,7 +24,7 @@ pub fn run(cfg: RenderConfig) -> Result<()> {
         std::fs::create_dir_all(d)
             .with_context(|| format!("cannot create --dump folder {}", d.display()))?;
     }
-    let pass = render_frames(setup, out, &mut run)?;
+    let pass = render_frames(setup, out, &mut run, cfg.gpu_camera_pass)?;
     let pb = progress::step("writing outputs");
     let time_ms = write_outputs(setup, out, &run, &pass)?;
     pb.finish_and_clear();
@@ -42,8 +42,14 @@ pub fn run(cfg: RenderConfig) -> Result<()> {
 }
 
 /// Renders every frame; a sequence writes `OUT-NNNN.png` per frame and the animated
-/// `OUT.gif` as it goes. Returns the last frame's camera pass.
-fn render_frames(setup: &Setup, out: &RenderOutputs, run: &mut Run) -> Result<Pass> {
+/// `OUT.gif` as it goes; `gpu_pass` takes the GPU's camera pass. Returns the last frame's
+/// camera pass.
+fn render_frames(
+    setup: &Setup,
+    out: &RenderOutputs,
+    run: &mut Run,
+    gpu_pass: bool,
+) -> Result<Pass> {
     let sequence = setup.frames > 1;
     let dump = out.dump.as_deref().map(DumpDir::new);
     let bar = progress::bar(setup.frames as u64, format!("rendering {}", run.label));
@@ -54,7 +60,11 @@ fn render_frames(setup: &Setup, out: &RenderOutputs, run: &mut Run) -> Result<Pa
     };
     let mut last = None;
     for i in 0..setup.frames {
-        let pass = Pass::render(setup, i, last.take())?;
+        let pass = if gpu_pass {
+            Pass::render_on_gpu(setup, i)?
+        } else {
+            Pass::render(setup, i, last.take())?
+        };
         let sink = dump.as_ref().map(|d| d as &dyn DumpSink);
         run.render(&pass.frame(setup, i, sink), !sequence)?;
         if let Some(anim) = animation.as_mut() {

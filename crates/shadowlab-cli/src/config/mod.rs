@@ -56,6 +56,8 @@ pub struct RenderConfig {
     pub setup: Setup,
     /// The files to write.
     pub outputs: RenderOutputs,
+    /// True for the GPU's own camera pass (`--camera-pass gpu`).
+    pub gpu_camera_pass: bool,
 }
 
 /// The files `render` writes, checked.
@@ -93,6 +95,7 @@ impl RenderConfig {
                 export_scene: a.export_scene.clone(),
                 dump: a.dump.clone(),
             },
+            gpu_camera_pass: a.camera_pass == "gpu",
         })
     }
 }

@@ -10,6 +10,17 @@
 //! pixels' rays with the plane), and coverage follows the hardware's rounding, so the
 //! triangle seen differs from the CPU's only on a few edge pixels (a test holds it to
 //! 99.9% of covered pixels). The position error bound is not formed here.
+//!
+//! [`on_device`] is the camera pass that stays there (the viewer's, and `render
+//! --camera-pass gpu`'s): the G-buffer's triangle ids, then stage `samples`
+//! (`samples.wgsl`), which forms each pixel's sample from its triangle as the library's
+//! pass does (the pixel ray met with the triangle's plane, the error bound, the normal)
+//! straight into the layout techniques read, and reduces the covered count and the
+//! receivers' bounds, the few numbers a technique's light fit needs on the CPU.
+
+mod samples;
+
+pub use samples::{on_device, read_view};
 
 use crate::compute::render_pipeline;
 use crate::device::Gpu;
@@ -83,7 +94,9 @@ fn target(gpu: &Gpu, camera: &Camera, format: wgpu::TextureFormat) -> wgpu::Text
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
         view_formats: &[],
     })
 }
@@ -96,6 +109,26 @@ pub fn render(
     triangles: usize,
     camera: &Camera,
 ) -> Result<GpuView> {
+    let mut timer = Timer::new(gpu, 1);
+    let textures = draw(gpu, buffers, triangles, camera, &mut timer)?;
+    let planes: Vec<Vec<u8>> = textures
+        .iter()
+        .map(|t| read_texture(gpu, t))
+        .collect::<Result<_>>()?;
+    let gpu_ms = timer.read(gpu)?.first().map(|s| s.1);
+    Ok(unpack(camera, &planes, gpu_ms))
+}
+
+/// Records and submits the G-buffer pass of `scene` (uploaded as `buffers`, `triangles`
+/// of them) from `camera`, timed by `timer` as `gbuffer`; returns its targets in
+/// [`TARGETS`]' order.
+fn draw(
+    gpu: &Gpu,
+    buffers: &SceneBuffers,
+    triangles: usize,
+    camera: &Camera,
+    timer: &mut Timer,
+) -> Result<Vec<wgpu::Texture>> {
     gpu.check_texture_side("the image width", camera.width)?;
     gpu.check_texture_side("the image height", camera.height)?;
     let bytes: u32 = TARGETS
@@ -165,7 +198,6 @@ pub fn render(
             })
         })
         .collect();
-    let mut timer = Timer::new(gpu, 1);
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -188,12 +220,7 @@ pub fn render(
         pass.draw(0..triangles as u32 * 3, 0..1);
     }
     gpu.queue.submit([encoder.finish()]);
-    let planes: Vec<Vec<u8>> = textures
-        .iter()
-        .map(|t| read_texture(gpu, t))
-        .collect::<Result<_>>()?;
-    let gpu_ms = timer.read(gpu)?.first().map(|s| s.1);
-    Ok(unpack(camera, &planes, gpu_ms))
+    Ok(textures)
 }
 
 fn unpack(camera: &Camera, planes: &[Vec<u8>], gpu_ms: Option<f64>) -> GpuView {

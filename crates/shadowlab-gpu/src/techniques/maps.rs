@@ -6,6 +6,7 @@
 
 use crate::compute::{pipeline, render_pipeline};
 use crate::device::{shared, Gpu};
+use crate::resident::DeviceView;
 use crate::shader::{Stage, ALPHA_MASK, LIGHT_DEPTH, TRIANGLES};
 use crate::transfer::{grid, output, storage, uniform, Timer};
 use crate::upload::{SceneBuffers, SceneKey};
@@ -264,8 +265,8 @@ pub(crate) fn array_view(texture: &wgpu::Texture) -> wgpu::TextureView {
 
 /// The look-up grid over the frame's pixels: `(pixels, threads per row)` for the
 /// parameters, and the workgroups.
-pub(crate) fn lookup_grid(gpu: &Gpu, frame: &Frame) -> (u32, u32, (u32, u32)) {
-    let n = frame.view.triangle.len() as u32;
+pub(crate) fn lookup_grid(gpu: &Gpu, view: &DeviceView) -> (u32, u32, (u32, u32)) {
+    let n = view.pixels();
     let (gx, gy, row) = grid(gpu, n, WORKGROUP);
     (n, row, (gx, gy))
 }
@@ -279,15 +280,14 @@ pub(crate) fn look_up(
     name: &str,
     stage: &Stage,
     resources: &[wgpu::BindingResource],
-    frame: &Frame,
-    view: &wgpu::Buffer,
+    view: &DeviceView,
     timer: &mut Timer,
     stats: &mut Stats,
 ) -> Result<wgpu::Buffer> {
     let gpu = &ms.gpu;
-    let n = frame.view.triangle.len() as u32;
+    let n = view.pixels();
     let out = output(gpu, "the shadow terms", u64::from(n) * 12)?;
-    let (_, _, (gx, gy)) = lookup_grid(gpu, frame);
+    let (_, _, (gx, gy)) = lookup_grid(gpu, view);
     let lookup = gpu.stage(name, "pipeline", || pipeline(gpu, stage, "main"))?;
     let mut entries: Vec<wgpu::BindGroupEntry> = resources
         .iter()
@@ -300,7 +300,7 @@ pub(crate) fn look_up(
     let k = entries.len() as u32;
     entries.push(wgpu::BindGroupEntry {
         binding: k,
-        resource: view.as_entire_binding(),
+        resource: view.samples.as_entire_binding(),
     });
     entries.push(wgpu::BindGroupEntry {
         binding: k + 1,

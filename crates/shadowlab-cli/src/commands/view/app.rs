@@ -265,7 +265,9 @@ impl<'a> App<'a> {
     }
 
     pub(super) fn render_args(&self, shot: &Path) -> Vec<String> {
-        super::reproduce::render_args(&self.session.state(), &screenshot::render_output(shot))
+        let mut state = self.session.state();
+        state.gpu_camera_pass = self.drawn.as_ref().is_some_and(|d| d.gpu_camera_pass);
+        super::reproduce::render_args(&state, &screenshot::render_output(shot))
     }
 
     /// Draws the view anew and uploads it.
@@ -320,8 +322,9 @@ impl<'a> App<'a> {
                 }
                 let shading = self.shading.as_ref().expect("made above");
                 let target = &w.textures.view;
+                let previous = (previous, self.on_device.take());
                 let (d, on) =
-                    shading.draw(s.scene, &s.camera, &s.light, t.as_mut(), previous, target)?;
+                    shading.draw((s.scene, &s.camera, &s.light), t.as_mut(), previous, target)?;
                 Ok((d, Some(on)))
             }
             _ => {

@@ -33,6 +33,9 @@ pub struct Drawn {
     pub dumps: Vec<(String, RgbImage)>,
     /// The technique's counters (its GPU stage times `gpu_STAGE_ms` among them).
     pub counters: std::collections::BTreeMap<String, f64>,
+    /// True when the camera pass was the GPU's own: its samples stayed on the device and
+    /// `view` holds no per-pixel data.
+    pub gpu_camera_pass: bool,
 }
 
 /// The camera pass of a frame: the camera with its depth range fitted, the samples, the
@@ -52,7 +55,9 @@ pub fn camera_pass(
     camera.validate()?;
     let mut stages_ms = Vec::new();
     let (kept, spare) = match previous {
-        Some(p) if p.camera == camera && p.layers.is_some() == layers => (Some(p), None),
+        Some(p) if p.camera == camera && p.layers.is_some() == layers && !p.gpu_camera_pass => {
+            (Some(p), None)
+        }
         // A moved camera renders into the last pass's buffers.
         Some(p) => (None, Some(p.view)),
         None => (None, None),
@@ -141,6 +146,7 @@ pub fn draw(
         image: Some(image),
         stages_ms,
         dumps,
+        gpu_camera_pass: false,
     })
 }
 

@@ -1,6 +1,8 @@
 //! The frame on the GPU, for a technique that leaves its shadow term on the device
-//! (`gpu:sm`, `gpu:pcf`, `gpu:raytrace`, `gpu:afsm`): the camera pass's samples uploaded
-//! once, the technique run over them, the view shaded into the window's texture
+//! (`gpu:sm`, `gpu:pcf`, `gpu:cascaded`, `gpu:pcss`, `gpu:raytrace`, `gpu:afsm`, and
+//! `gpu:psm`/`gpu:lispsm`): the GPU's own camera pass drawn into a device buffer once per
+//! camera (the library's pass uploaded instead for a technique that reads the samples on
+//! the CPU), the technique run over it, the view shaded into the window's texture
 //! (`shade.wgsl`) and, when the error overlay is on, `gpu:raytrace` traced over the same
 //! samples and compared on the device — nothing read back but the error's four sums and
 //! the timestamp queries.
@@ -12,12 +14,16 @@ use shadowlab::camera::Camera;
 use shadowlab::frame::Frame;
 use shadowlab::light::Light;
 use shadowlab::scene::Scene;
+use shadowlab::view::ViewSamples;
+use shadowlab_gpu::camera_pass;
 use shadowlab_gpu::compute::pipeline;
 use shadowlab_gpu::device::Gpu;
+use shadowlab_gpu::resident::DeviceView;
 use shadowlab_gpu::resident::OnDevice;
 use shadowlab_gpu::shader::{Stage, LIGHT, RAY_OFFSET};
 use shadowlab_gpu::transfer::{read_back, storage, uniform, Timer};
-use shadowlab_gpu::upload::{view_buffer, LightU};
+use shadowlab_gpu::upload::{LightU, SceneBuffers};
+use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -43,7 +49,7 @@ struct ShadeU {
 /// What stays on the device of a frame drawn there.
 pub struct OnDeviceFrame {
     /// The camera pass's samples.
-    pub view: wgpu::Buffer,
+    pub view: DeviceView,
     /// The technique's shadow term.
     pub visibility: wgpu::Buffer,
 }
@@ -51,6 +57,7 @@ pub struct OnDeviceFrame {
 /// The shading and the error on the device, for one scene.
 pub struct GpuShading {
     gpu: Arc<Gpu>,
+    scene: SceneBuffers,
     albedo: wgpu::Buffer,
     reference: Box<dyn OnDevice>,
 }
@@ -65,6 +72,7 @@ impl GpuShading {
         let reference = shadowlab_gpu::techniques::create_on_device(REFERENCE)
             .context("the GPU reference is not registered")?;
         Ok(GpuShading {
+            scene: SceneBuffers::new(&gpu, scene)?,
             gpu,
             albedo,
             reference,
@@ -82,26 +90,33 @@ impl GpuShading {
     }
 
     /// Draws the frame of `camera` and `light` with `technique` on the device, shading it
-    /// into `target`.
-    #[allow(clippy::too_many_arguments)]
+    /// into `target`. The camera pass is the GPU's own, its samples never read back
+    /// (kept from `previous` when the camera is the same), unless the technique reads the
+    /// samples on the CPU: then the library's pass is uploaded.
     pub fn draw(
         &self,
-        scene: &Scene,
-        camera: &Camera,
-        light: &Light,
+        (scene, camera, light): (&Scene, &Camera, &Light),
         technique: &mut dyn OnDevice,
-        previous: Option<Drawn>,
+        previous: (Option<Drawn>, Option<OnDeviceFrame>),
         target: &wgpu::Texture,
     ) -> Result<(Drawn, OnDeviceFrame)> {
-        let (camera, view, _, mut stages_ms) = frame::camera_pass(scene, camera, false, previous)?;
         let gpu = &self.gpu;
-        let t0 = Instant::now();
-        let view_buf = view_buffer(gpu, &view)?;
-        stages_ms.push(("upload view".to_string(), frame::ms(t0)));
+        let (camera, view, device_view, mut stages_ms, mut counters) =
+            if technique.needs_cpu_samples() {
+                let (camera, view, _, mut stages_ms) =
+                    frame::camera_pass(scene, camera, false, previous.0)?;
+                let t0 = Instant::now();
+                let device_view = DeviceView::upload(gpu, &view)?;
+                stages_ms.push(("upload view".to_string(), frame::ms(t0)));
+                (camera, view, device_view, stages_ms, BTreeMap::new())
+            } else {
+                self.camera_pass(scene, camera, previous)?
+            };
+        let gpu_camera_pass = !device_view.uploaded;
         let f = Frame::new(scene, &camera, light, &view);
         let t1 = Instant::now();
         let shadows = technique
-            .render_on_device(&f, &view_buf)
+            .render_on_device(&f, &device_view)
             .with_context(|| format!("technique {}", technique.name()))?;
         let technique_ms = frame::ms(t1);
         if shadows.stats.stages_ms.is_empty() {
@@ -110,14 +125,14 @@ impl GpuShading {
             stages_ms.extend(shadows.stats.stages_ms.iter().cloned());
         }
         let t2 = Instant::now();
-        let mut counters = shadows.stats.counters.clone();
+        counters.extend(shadows.stats.counters.clone());
         let size = (camera.width, camera.height);
         let u = self.uniform(light, size);
         let group = self.group(
             "shade",
             &[
                 (0, &u),
-                (1, &view_buf),
+                (1, &device_view.samples),
                 (2, &shadows.visibility),
                 (3, &self.albedo),
             ],
@@ -135,12 +150,65 @@ impl GpuShading {
             stages_ms,
             dumps: Vec::new(),
             counters,
+            gpu_camera_pass,
         };
         let on_device = OnDeviceFrame {
-            view: view_buf,
+            view: device_view,
             visibility: shadows.visibility,
         };
         Ok((drawn, on_device))
+    }
+
+    /// The GPU's camera pass of `camera`, its depth range fitted: kept from the previous
+    /// frame when that frame's was the GPU's of the same camera, else drawn. The frame's
+    /// `view` holds no per-pixel data (the samples stay on the device); the counters hold
+    /// the pass's GPU times.
+    #[allow(clippy::type_complexity)]
+    fn camera_pass(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        (previous, previous_on): (Option<Drawn>, Option<OnDeviceFrame>),
+    ) -> Result<(
+        Camera,
+        ViewSamples,
+        DeviceView,
+        Vec<(String, f64)>,
+        BTreeMap<String, f64>,
+    )> {
+        let mut camera = *camera;
+        camera.fit_depth_range(&scene.bounds);
+        camera.validate()?;
+        let unsampled = || ViewSamples {
+            width: camera.width,
+            height: camera.height,
+            triangle: Vec::new(),
+            position: Vec::new(),
+            position_error: Vec::new(),
+            normal: Vec::new(),
+            depth: Vec::new(),
+            dpdx: Vec::new(),
+            dpdy: Vec::new(),
+            camera,
+            time_ms: 0.0,
+        };
+        if let (Some(p), Some(on)) = (previous, previous_on) {
+            if p.gpu_camera_pass && p.camera == camera {
+                let kept = vec![("camera pass (GPU, kept)".to_string(), 0.0)];
+                return Ok((camera, p.view, on.view, kept, BTreeMap::new()));
+            }
+        }
+        let t0 = Instant::now();
+        let (device_view, times) =
+            camera_pass::on_device(&self.gpu, &self.scene, scene.len(), &camera)?;
+        let stages = vec![("camera pass (GPU)".to_string(), frame::ms(t0))];
+        Ok((
+            camera,
+            unsampled(),
+            device_view,
+            stages,
+            times.into_iter().collect(),
+        ))
     }
 
     /// Traces the reference with `spp` samples a pixel over the drawn frame `d`, compares
@@ -173,7 +241,7 @@ impl GpuShading {
             "measure",
             &[
                 (0, &u),
-                (1, &on.view),
+                (1, &on.view.samples),
                 (2, &on.visibility),
                 (5, &reference.visibility),
                 (6, &sums),

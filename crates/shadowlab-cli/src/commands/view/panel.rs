@@ -222,8 +222,14 @@ impl App<'_> {
             .map(|t| t.params())
             .unwrap_or_default();
         let on_device = self.on_device.is_some();
+        let gpu_pass = self.drawn.as_ref().is_some_and(|d| d.gpu_camera_pass);
         let backend = match (on_device, s.name.starts_with("gpu:")) {
-            (true, _) => "drawn on the GPU: technique, shading, error (nothing read back)",
+            (true, _) if gpu_pass => {
+                "drawn on the GPU: camera pass, technique, shading, error (nothing read back)"
+            }
+            (true, _) => {
+                "CPU camera pass uploaded (the technique reads it there); technique, shading, error on the GPU"
+            }
             (false, true) => "GPU technique (its shadow term read back), CPU shading, uploaded",
             (false, false) => "CPU technique, CPU shading, image uploaded",
         };

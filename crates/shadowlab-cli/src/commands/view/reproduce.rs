@@ -118,6 +118,8 @@ pub struct ViewState<'a> {
     pub technique: &'a str,
     /// Its parameters set by the user.
     pub params: &'a [(String, String)],
+    /// True when the view's camera pass is the GPU's own (`--camera-pass gpu`).
+    pub gpu_camera_pass: bool,
 }
 
 /// The arguments of `shadowlab render` (without the program's name) that reproduce the
@@ -165,6 +167,9 @@ pub fn render_args(v: &ViewState, output: &Path) -> Vec<String> {
     }
     for (k, val) in v.params {
         a.extend(["--param".into(), format!("{k}={val}")]);
+    }
+    if v.gpu_camera_pass {
+        a.extend(["--camera-pass".into(), "gpu".into()]);
     }
     a.extend(["--output".into(), output.display().to_string()]);
     a

@@ -161,6 +161,7 @@ impl<'a> Session<'a> {
             light_samples: self.light_samples,
             technique: &self.name,
             params: self.params(),
+            gpu_camera_pass: false,
         }
     }
 

@@ -86,7 +86,7 @@ mod samples;
 
 use crate::compute::to_rgb;
 use crate::device::{shared, Gpu};
-use crate::resident::{DeviceShadows, OnDevice};
+use crate::resident::{DeviceShadows, DeviceView, OnDevice};
 use crate::shader::{Common, Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, TRIANGLES, WATERTIGHT};
 use crate::transfer::storage;
 use crate::upload::{view_buffer, SceneBuffers, SceneKey};
@@ -319,13 +319,18 @@ impl ShadowTechnique for GpuAliasFree {
 }
 
 impl OnDevice for GpuAliasFree {
-    fn render_on_device(&mut self, frame: &Frame, view: &wgpu::Buffer) -> Result<DeviceShadows> {
+    fn render_on_device(&mut self, frame: &Frame, view: &DeviceView) -> Result<DeviceShadows> {
         let mut stats = Stats::default();
         let o = self.frame(frame, Some(view), &mut stats)?;
         let visibility = o
             .out_buffer
             .ok_or_else(|| Error::Internal(format!("{NAME}: the shadow terms left no buffer")))?;
         Ok(DeviceShadows { visibility, stats })
+    }
+
+    /// More than one sample a pixel traces sub-pixel rays from the pixels on the CPU.
+    fn needs_cpu_samples(&self) -> bool {
+        self.samples > 1
     }
 }
 
@@ -335,7 +340,7 @@ impl GpuAliasFree {
     fn frame(
         &mut self,
         frame: &Frame,
-        uploaded: Option<&wgpu::Buffer>,
+        uploaded: Option<&DeviceView>,
         stats: &mut Stats,
     ) -> Result<run::Outcome> {
         frame.light.validate()?;
@@ -343,11 +348,11 @@ impl GpuAliasFree {
         let res = self.resident(frame, stats)?;
         let gpu = res.gpu.clone();
         let view = frame.view;
-        let n_pixels = view.triangle.len() as u32;
+        let n_pixels = uploaded.map_or(view.triangle.len() as u32, DeviceView::pixels);
         let planes = planes::planes(frame.light, frame.scene);
         let (samples, pixel_start, n_samples) = if spp <= 1 {
             let v = match uploaded {
-                Some(v) => v.clone(),
+                Some(v) => v.samples.clone(),
                 None => stats.stage("upload_view", || view_buffer(&gpu, view))?,
             };
             (v, storage(&gpu, "no pixel runs", &[0; 4])?, n_pixels)

@@ -26,7 +26,7 @@
 use super::maps::{self, depth_scale, MapScene};
 use super::shadow_map::{Fallback, GpuShadowMap};
 use crate::compute::{bind, pipeline};
-use crate::resident::{self, ShadowTerm};
+use crate::resident::{self, DeviceView, ShadowTerm};
 use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
 use crate::transfer::{read_back, storage, uniform, Timer};
 use crate::upload::LightU;
@@ -133,7 +133,7 @@ fn depth_interval(
     ms: &MapScene,
     cpu: &Cascaded,
     frame: &Frame,
-    view: &wgpu::Buffer,
+    view: &DeviceView,
     timer: &mut Timer,
     stats: &mut Stats,
 ) -> Result<(f32, f32)> {
@@ -142,7 +142,7 @@ fn depth_interval(
         return Ok((cam.near, cam.far));
     }
     let gpu = &ms.gpu;
-    let (count, row, (gx, gy)) = maps::lookup_grid(gpu, frame);
+    let (count, row, (gx, gy)) = maps::lookup_grid(gpu, view);
     let (eye, forward) = eye_forward(frame);
     let params = BoundsParams {
         light: LightU::of(frame.light),
@@ -161,7 +161,7 @@ fn depth_interval(
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         });
     let reduce = gpu.stage(NAME, "pipeline", || pipeline(gpu, &DEPTH_BOUNDS, "main"))?;
-    let group = bind(&gpu.device, &reduce, &[&params, view, &bounds]);
+    let group = bind(&gpu.device, &reduce, &[&params, &view.samples, &bounds]);
     let raw = stats.stage("depth_bounds", || {
         gpu.stage(NAME, "depth_bounds", || {
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -191,7 +191,7 @@ impl ShadowTerm for GpuCascaded {
     fn shadow_term(
         &mut self,
         frame: &Frame,
-        view: &wgpu::Buffer,
+        view: &DeviceView,
         stats: &mut Stats,
     ) -> Result<wgpu::Buffer> {
         let cpu = self.cpu.clone();
@@ -241,7 +241,7 @@ impl ShadowTerm for GpuCascaded {
             })
             .collect();
         let table = storage(&gpu, "the cascades", bytemuck::cast_slice(&table))?;
-        let (count, row, _) = maps::lookup_grid(&gpu, frame);
+        let (count, row, _) = maps::lookup_grid(&gpu, view);
         let (eye, forward) = eye_forward(frame);
         let slope = pcf_slope_bias(cpu.slope_bias, cpu.kernel);
         let params = LookupParams {
@@ -270,7 +270,6 @@ impl ShadowTerm for GpuCascaded {
                 wgpu::BindingResource::TextureView(&array),
                 wgpu::BindingResource::Sampler(&sampler),
             ],
-            frame,
             view,
             &mut timer,
             stats,

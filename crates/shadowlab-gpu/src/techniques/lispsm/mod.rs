@@ -17,7 +17,7 @@
 
 use super::maps::{self, depth_scale, MapScene};
 use super::shadow_map::{Fallback, GpuShadowMap};
-use crate::resident::{self, ShadowTerm};
+use crate::resident::{self, DeviceView, ShadowTerm};
 use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
 use crate::transfer::{uniform, Timer};
 use crate::upload::LightU;
@@ -69,10 +69,15 @@ pub struct GpuLispsm {
 resident::device_twin!(GpuLispsm, NAME);
 
 impl ShadowTerm for GpuLispsm {
+    /// The light's fit reads every visible point on the CPU.
+    fn cpu_samples(&self) -> bool {
+        true
+    }
+
     fn shadow_term(
         &mut self,
         frame: &Frame,
-        view: &wgpu::Buffer,
+        view: &DeviceView,
         stats: &mut Stats,
     ) -> Result<wgpu::Buffer> {
         let res = check_resolution(NAME, self.cpu.resolution)?;
@@ -113,7 +118,7 @@ impl ShadowTerm for GpuLispsm {
                 )
             })
         })?;
-        let (count, row, _) = maps::lookup_grid(&gpu, frame);
+        let (count, row, _) = maps::lookup_grid(&gpu, view);
         let d = (warp.y.1 - warp.y.0).max(1e-12);
         let k = 2.0 * (warp.n + d) / d;
         let slope = pcf_slope_bias(cpu.slope_bias, cpu.kernel);
@@ -145,7 +150,6 @@ impl ShadowTerm for GpuLispsm {
                 wgpu::BindingResource::TextureView(&array),
                 wgpu::BindingResource::Sampler(&sampler),
             ],
-            frame,
             view,
             &mut timer,
             stats,

@@ -26,7 +26,7 @@ mod min_pyramid;
 use super::maps::{self, MapScene};
 use crate::compute::pipeline;
 use crate::device::Gpu;
-use crate::resident::{self, ShadowTerm};
+use crate::resident::{self, DeviceView, ShadowTerm};
 use crate::shader::{Common, Stage, LIGHT, RAY_OFFSET};
 use crate::transfer::{output, uniform, Timer};
 use crate::upload::LightU;
@@ -93,7 +93,7 @@ impl ShadowTerm for GpuPcss {
     fn shadow_term(
         &mut self,
         frame: &Frame,
-        view: &wgpu::Buffer,
+        view: &DeviceView,
         stats: &mut Stats,
     ) -> Result<wgpu::Buffer> {
         let side = check_resolution(NAME, self.cpu.resolution)?;
@@ -102,7 +102,7 @@ impl ShadowTerm for GpuPcss {
         let gpu = ms.gpu.clone();
         let views = light_views(
             frame.light,
-            &frame.view.receiver_bounds(),
+            &view.receivers,
             &frame.scene.bounds,
             DIRECTIONAL_PAD,
         );
@@ -115,7 +115,7 @@ impl ShadowTerm for GpuPcss {
             )
         })?;
         let sampler = maps::comparison_sampler(&gpu);
-        let (n, row, (gx, gy)) = maps::lookup_grid(&gpu, frame);
+        let (n, row, (gx, gy)) = maps::lookup_grid(&gpu, view);
         let out = output(&gpu, "the shadow terms", u64::from(n) * 12)?;
         let radii = output(&gpu, "the penumbra radii", u64::from(n) * 4)?;
         let mut timer = Timer::new(&gpu, 32);
@@ -149,7 +149,7 @@ impl ShadowTerm for GpuPcss {
         let shared = [
             params.as_entire_binding(),
             table.as_entire_binding(),
-            view.as_entire_binding(),
+            view.samples.as_entire_binding(),
             wgpu::BindingResource::TextureView(&map_view),
         ];
         let search = [

@@ -30,7 +30,7 @@
 use super::maps::{self, MapScene};
 use super::shadow_map::{Fallback, GpuShadowMap};
 use crate::compute::render_pipeline;
-use crate::resident::{self, ShadowTerm};
+use crate::resident::{self, DeviceView, ShadowTerm};
 use crate::shader::{Stage, ALPHA_MASK, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET, TRIANGLES};
 use crate::transfer::{storage, uniform, Timer};
 use crate::upload::LightU;
@@ -128,7 +128,7 @@ impl GpuPsm {
     fn draw(
         &mut self,
         frame: &Frame,
-        view: &wgpu::Buffer,
+        view: &DeviceView,
         setup: &Setup,
         stats: &mut Stats,
     ) -> Result<wgpu::Buffer> {
@@ -185,7 +185,7 @@ impl GpuPsm {
             "the post-perspective maps",
             bytemuck::cast_slice(&table),
         )?;
-        let (count, row, _) = maps::lookup_grid(&gpu, frame);
+        let (count, row, _) = maps::lookup_grid(&gpu, view);
         let mut faces = [u32::MAX; 8];
         if let Some(cube) = setup.cube {
             for (f, m) in faces.iter_mut().zip(cube) {
@@ -220,7 +220,6 @@ impl GpuPsm {
                 table.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&array),
             ],
-            frame,
             view,
             &mut timer,
             stats,
@@ -244,10 +243,15 @@ impl GpuPsm {
 resident::device_twin!(GpuPsm, NAME);
 
 impl ShadowTerm for GpuPsm {
+    /// The light's fit reads every visible point on the CPU.
+    fn cpu_samples(&self) -> bool {
+        true
+    }
+
     fn shadow_term(
         &mut self,
         frame: &Frame,
-        view: &wgpu::Buffer,
+        view: &DeviceView,
         stats: &mut Stats,
     ) -> Result<wgpu::Buffer> {
         let plan = stats.stage("body", || self.cpu.plan(frame))?;

@@ -33,7 +33,7 @@
 
 use crate::compute::{bind, pipeline};
 use crate::device::{shared, Gpu};
-use crate::resident::{self, ShadowTerm};
+use crate::resident::{self, DeviceView, ShadowTerm};
 use crate::shader::{Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, TRIANGLES, WATERTIGHT};
 use crate::transfer::{grid, output, uniform, Timer};
 use crate::upload::{BvhBuffers, LightU, SceneBuffers, SceneKey};
@@ -139,7 +139,7 @@ impl ShadowTerm for GpuRayTrace {
     fn shadow_term(
         &mut self,
         frame: &Frame,
-        view: &wgpu::Buffer,
+        view: &DeviceView,
         stats: &mut Stats,
     ) -> Result<wgpu::Buffer> {
         if frame.area.is_some() {
@@ -150,7 +150,7 @@ impl ShadowTerm for GpuRayTrace {
         let spp = self.cpu.spp;
         let res = self.resident(frame, stats)?;
         let gpu = res.gpu.clone();
-        let n = frame.view.triangle.len() as u32;
+        let n = view.pixels();
         let out = output(&gpu, "the shadow terms", u64::from(n) * 12)?;
         let mut timer = Timer::new(&gpu, spp.max(1) + 1);
         if spp <= 1 {
@@ -172,10 +172,7 @@ impl ShadowTerm for GpuRayTrace {
         for (stage, ms) in timer.read(&gpu)? {
             stats.count(&format!("gpu_{stage}_ms"), ms);
         }
-        stats.count(
-            "rays",
-            frame.view.covered_count() as f64 * f64::from(spp.max(1)),
-        );
+        stats.count("rays", view.covered as f64 * f64::from(spp.max(1)));
         stats.memory_bytes = res.scene.bytes + res.bvh.bytes;
         stats.device = Some(gpu.adapter.label());
         Ok(out)
@@ -203,8 +200,13 @@ struct CameraU {
 }
 
 /// The trace's parameters for `frame`.
-fn trace_params(gpu: &Gpu, res: &Resident, frame: &Frame) -> (TraceParams, (u32, u32)) {
-    let n = frame.view.triangle.len() as u32;
+fn trace_params(
+    gpu: &Gpu,
+    res: &Resident,
+    frame: &Frame,
+    view: &DeviceView,
+) -> (TraceParams, (u32, u32)) {
+    let n = view.pixels();
     let (gx, gy, row) = grid(gpu, n, WORKGROUP);
     let params = TraceParams {
         light: LightU::of(frame.light),
@@ -243,13 +245,13 @@ fn dispatch(
 fn supersample(
     res: &Resident,
     frame: &Frame,
-    view: &wgpu::Buffer,
+    view: &DeviceView,
     samples: &[Vec2],
     out: &wgpu::Buffer,
     timer: &mut Timer,
 ) -> Result<()> {
     let gpu = &res.gpu;
-    let (params, groups) = trace_params(gpu, res, frame);
+    let (params, groups) = trace_params(gpu, res, frame, view);
     let params = uniform(gpu, "trace parameters", &params);
     let (eye, forward, right, up, inv_width, inv_height, parallel) = frame.camera.rays().parts();
     let cam = |first: u32| CameraU {
@@ -260,7 +262,7 @@ fn supersample(
         right: right.to_array(),
         inv_height,
         up: up.to_array(),
-        width: frame.view.width,
+        width: view.width,
         spp: samples.len() as u32,
         gamma7: gamma(7),
         gamma16: gamma(16),
@@ -274,18 +276,14 @@ fn supersample(
         "the sub-pixel positions",
         bytemuck::cast_slice(&subpixel),
     )?;
-    let accum = output(
-        gpu,
-        "the sub-pixel sums",
-        u64::from(frame.view.triangle.len() as u32) * 16,
-    )?;
+    let accum = output(gpu, "the sub-pixel sums", u64::from(view.pixels()) * 16)?;
     let pipeline = res
         .supersample
         .as_ref()
         .ok_or_else(|| Error::Internal(format!("{NAME}: no supersample pipeline")))?;
     for first in (0..samples.len() as u32).step_by(ROUND as usize) {
         let cam = uniform(gpu, "camera", &cam(first));
-        let mut buffers = trace_bindings(res, &params, view, out);
+        let mut buffers = trace_bindings(res, &params, &view.samples, out);
         buffers.extend([&subpixel, &cam, &accum]);
         dispatch(gpu, pipeline, &buffers, groups, timer);
     }
@@ -319,14 +317,14 @@ fn trace_bindings<'a>(
 fn trace(
     res: &Resident,
     frame: &Frame,
-    view: &wgpu::Buffer,
+    view: &DeviceView,
     out: &wgpu::Buffer,
     timer: &mut Timer,
 ) -> Result<()> {
     let gpu = &res.gpu;
-    let (params, groups) = trace_params(gpu, res, frame);
+    let (params, groups) = trace_params(gpu, res, frame, view);
     let params = uniform(gpu, "trace parameters", &params);
-    let buffers = trace_bindings(res, &params, view, out);
+    let buffers = trace_bindings(res, &params, &view.samples, out);
     dispatch(gpu, &res.trace, &buffers, groups, timer);
     Ok(())
 }

@@ -21,7 +21,7 @@
 //! (`counters.hardware_raster = 1`); a compute rasterizer is not offered yet.
 
 use super::maps::{self, MapScene};
-use crate::resident::{self, ShadowTerm};
+use crate::resident::{self, DeviceView, ShadowTerm};
 use crate::shader::{Stage, LIGHT, MAP_COMPARE, MAP_PIXELS, RAY_OFFSET};
 use crate::transfer::{uniform, Timer};
 use crate::upload::LightU;
@@ -95,7 +95,7 @@ impl GpuShadowMap {
     /// uploads it once) and leaves its map in `maps` (for a viewer).
     pub(crate) fn fallback(
         frame: &Frame,
-        view: &wgpu::Buffer,
+        view: &DeviceView,
         stats: &mut Stats,
         (scene, maps): (&mut Option<MapScene>, &mut Option<wgpu::Texture>),
         f: &Fallback,
@@ -147,7 +147,7 @@ impl ShadowTerm for GpuShadowMap {
     fn shadow_term(
         &mut self,
         frame: &Frame,
-        view: &wgpu::Buffer,
+        view: &DeviceView,
         stats: &mut Stats,
     ) -> Result<wgpu::Buffer> {
         let name = self.name;
@@ -157,7 +157,7 @@ impl ShadowTerm for GpuShadowMap {
         let gpu = ms.gpu.clone();
         let views = light_views(
             frame.light,
-            &frame.view.receiver_bounds(),
+            &view.receivers,
             &frame.scene.bounds,
             DIRECTIONAL_PAD,
         );
@@ -169,7 +169,7 @@ impl ShadowTerm for GpuShadowMap {
                 maps::draw_views(ms, &texture, &views, frame, &mut timer)
             })
         })?;
-        let (count, row, _) = maps::lookup_grid(&gpu, frame);
+        let (count, row, _) = maps::lookup_grid(&gpu, view);
         let params = LookupParams {
             light: LightU::of(frame.light),
             count,
@@ -194,7 +194,6 @@ impl ShadowTerm for GpuShadowMap {
                 wgpu::BindingResource::TextureView(&array),
                 wgpu::BindingResource::Sampler(&sampler),
             ],
-            frame,
             view,
             &mut timer,
             stats,

@@ -1,0 +1,148 @@
+// The GPU camera pass, stage `samples`: each pixel's view sample formed from the triangle
+// the G-buffer (`gbuffer.wgsl`) saw there, as the library's camera pass forms it
+// (`view.rs`, `sample`): the ray through the pixel's centre (`RayGenerator::ray`) met with
+// the triangle's plane (`math::intersect_plane`), the point from its barycentrics with its
+// floating-point error bound (`SurfacePoint::from_barycentrics`), the face normal turned
+// against the ray. A pixel whose ray runs along the plane, or whose point is not finite,
+// is uncovered, as on the CPU. Written in the layout every technique reads
+// (`upload::view_floats`: position, error bound, normal, triangle id's bits), with the
+// count of covered pixels and the bounds of their positions reduced alongside by integer
+// atomics on order-preserving keys: minimum, maximum and sum do not depend on the order
+// the pixels ran in, so the summary is the same bits every run. The G-buffer discarded
+// the fragments alpha masks cut out already. Composed after shaders/common/ray_offset.wgsl.
+
+struct SamplesU {
+    eye: vec3<f32>,
+    // 1 for parallel (orthographic) rays.
+    parallel: u32,
+    forward: vec3<f32>,
+    inv_width: f32,
+    right: vec3<f32>,
+    inv_height: f32,
+    up: vec3<f32>,
+    width: u32,
+    height: u32,
+    // The library's gamma(7) and gamma(16), the error-bound factors of a surface point.
+    gamma7: f32,
+    gamma16: f32,
+    // Invocations per row of the dispatch grid.
+    row: u32,
+}
+
+@group(0) @binding(0) var<uniform> cam: SamplesU;
+@group(0) @binding(1) var ids: texture_2d<u32>;
+@group(0) @binding(2) var<storage, read> tris: array<f32>;
+@group(0) @binding(3) var<storage, read_write> view: array<f32>;
+// Covered pixels, then the order-preserving keys of the positions' minimum (x, y, z) and
+// maximum (x, y, z).
+@group(0) @binding(4) var<storage, read_write> summary: array<atomic<u32>, 7>;
+
+const NO_TRIANGLE: u32 = 0xffffffffu;
+const VIEW_STRIDE: u32 = 10u;
+
+// Vertex `k` of triangle `tri` (nine f32 a triangle).
+fn corner(tri: u32, k: u32) -> vec3<f32> {
+    let i = tri * 9u + k * 3u;
+    return vec3<f32>(tris[i], tris[i + 1u], tris[i + 2u]);
+}
+
+// glam's `cross`, term for term.
+fn cross3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+
+// A float's bits mapped so that unsigned order is the floats' order.
+fn order_key(f: f32) -> u32 {
+    let b = bitcast<u32>(f);
+    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
+}
+
+fn write_uncovered(k: u32) {
+    for (var i = 0u; i < 9u; i++) {
+        view[k * VIEW_STRIDE + i] = 0.0;
+    }
+    view[k * VIEW_STRIDE + 9u] = bitcast<f32>(NO_TRIANGLE);
+}
+
+fn finite3(v: vec3<f32>) -> bool {
+    // NaN fails every comparison; infinities exceed the largest float.
+    return all(abs(v) <= vec3<f32>(3.4028235e38));
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let k = gid.y * cam.row + gid.x;
+    if k >= cam.width * cam.height {
+        return;
+    }
+    let x = k % cam.width;
+    let y = k / cam.width;
+    let tri = textureLoad(ids, vec2<u32>(x, y), 0).x;
+    if tri == NO_TRIANGLE {
+        write_uncovered(k);
+        return;
+    }
+    // RayGenerator::ray through the pixel's centre.
+    let nx = (f32(x) + 0.5) * cam.inv_width * 2.0 - 1.0;
+    let ny = 1.0 - (f32(y) + 0.5) * cam.inv_height * 2.0;
+    var o = cam.eye;
+    var d = cam.forward + cam.right * nx + cam.up * ny;
+    if cam.parallel != 0u {
+        o = cam.eye + (cam.right * nx + cam.up * ny);
+        d = cam.forward;
+    }
+    // intersect_plane: barycentrics of the ray's meeting with the triangle's plane.
+    let v0 = corner(tri, 0u);
+    let v1 = corner(tri, 1u);
+    let v2 = corner(tri, 2u);
+    let e1 = v1 - v0;
+    let e2 = v2 - v0;
+    let p = cross3(d, e2);
+    let det = dot3(e1, p);
+    if det == 0.0 || !(abs(det) <= 3.4028235e38) {
+        write_uncovered(k);
+        return;
+    }
+    let inv = 1.0 / det;
+    let s = o - v0;
+    let b1 = dot3(s, p) * inv;
+    let q = cross3(s, e1);
+    let b2 = dot3(d, q) * inv;
+    let b0 = 1.0 - b1 - b2;
+    // SurfacePoint::from_barycentrics.
+    let point = v0 * b0 + v1 * b1 + v2 * b2;
+    let mag = abs(v0 * b0) + abs(v1 * b1) + abs(v2 * b2);
+    let vmag = max(max(abs(v0), abs(v1)), abs(v2));
+    let err = mag * cam.gamma7 + vmag * cam.gamma16;
+    // The face normal, turned against the ray (glam's normalize_or_zero).
+    let c = cross3(e1, e2);
+    let len2 = dot3(c, c);
+    var n = vec3<f32>(0.0);
+    if len2 > 0.0 && len2 <= 3.4028235e38 {
+        n = c * (1.0 / sqrt(len2));
+    }
+    if dot3(n, d) > 0.0 {
+        n = -n;
+    }
+    if !finite3(point) || all(n == vec3<f32>(0.0)) {
+        write_uncovered(k);
+        return;
+    }
+    let base = k * VIEW_STRIDE;
+    view[base] = point.x;
+    view[base + 1u] = point.y;
+    view[base + 2u] = point.z;
+    view[base + 3u] = err.x;
+    view[base + 4u] = err.y;
+    view[base + 5u] = err.z;
+    view[base + 6u] = n.x;
+    view[base + 7u] = n.y;
+    view[base + 8u] = n.z;
+    view[base + 9u] = bitcast<f32>(tri);
+    atomicAdd(&summary[0], 1u);
+    for (var i = 0u; i < 3u; i++) {
+        let key = order_key(point[i]);
+        atomicMin(&summary[1u + i], key);
+        atomicMax(&summary[4u + i], key);
+    }
+}
