@@ -28,18 +28,28 @@ pub fn pipeline(gpu: &Gpu, stage: &Stage, entry: &str) -> wgpu::ComputePipeline 
 }
 
 /// `stage`'s depth-tested render pipeline ([`Stage::depth_tested_pipeline`]) with the
-/// colour `targets`, made once per device and kept.
+/// colour `targets` and fragment entry point `fs`, made once per device and kept.
 pub fn render_pipeline(
     gpu: &Gpu,
     stage: &Stage,
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> wgpu::RenderPipeline {
+    render_pipeline_to(gpu, stage, "fs", targets)
+}
+
+/// [`render_pipeline`] with the fragment entry point `fragment`.
+pub fn render_pipeline_to(
+    gpu: &Gpu,
+    stage: &Stage,
+    fragment: &str,
+    targets: &[Option<wgpu::ColorTargetState>],
+) -> wgpu::RenderPipeline {
     let mut made = gpu.render.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some((_, p)) = made.iter().find(|(k, _)| k.is(stage, "")) {
+    if let Some((_, p)) = made.iter().find(|(k, _)| k.is(stage, fragment)) {
         return p.clone();
     }
-    let p = stage.depth_tested_pipeline(&gpu.device, targets);
-    made.push((PipelineKey::new(stage, ""), p.clone()));
+    let p = stage.depth_tested_pipeline(&gpu.device, fragment, targets);
+    made.push((PipelineKey::new(stage, fragment), p.clone()));
     p
 }
 

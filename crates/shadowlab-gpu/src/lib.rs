@@ -14,6 +14,16 @@
 //! (a software adapter's line says `CPU-emulated`). So compare, report, bench and Python
 //! need no GPU case beyond the name.
 //!
+//! A technique runs over a [`resident::DeviceView`]: the camera pass's samples on the
+//! device and the few numbers of them a light fit needs on the CPU (covered count, the
+//! receivers' bounds). A verdict uploads the library's pass into one; the viewer (and
+//! `render --camera-pass gpu`) makes one with the GPU's own pass
+//! ([`camera_pass::on_device`]), whose samples never leave the device. So a technique reads
+//! nothing per pixel of the frame's CPU samples, unless it says it must
+//! ([`resident::OnDevice::needs_cpu_samples`]: `gpu:psm` and `gpu:lispsm` fit their light
+//! over every visible point, `gpu:afsm` traces its sub-pixel hits from the pixels); a test
+//! runs every other one on a frame that holds none.
+//!
 //! Layout:
 //!
 //! ```text
@@ -23,7 +33,8 @@
 //! compute.rs                pipelines and bind groups by binding number, read-back to RGB
 //! upload.rs                 scene (per revision), BVH, view samples -> GPU buffers
 //! resident.rs               the shadow term left on the device (OnDevice), for the viewer
-//! camera_pass/              the GPU G-buffer (benchmarks, the viewer): gbuffer.wgsl
+//! camera_pass/              the GPU's camera pass: the hardware G-buffer (gbuffer.wgsl),
+//!                           made into the view samples on the device (samples.wgsl)
 //! shader.rs                 the include step composing shaders/common/*.wgsl into stages
 //! shaders/common/*.wgsl     written once: watertight test, ray offset, light, alpha masks
 //! techniques/maps.rs        what the warped and split maps share: layers of one depth

@@ -5,14 +5,13 @@
 //! technique works as before through [`ShadowTechnique::render`] (its result uploaded by
 //! the caller).
 
+pub use crate::camera_pass::DeviceView;
 use crate::compute::to_rgb;
 use crate::device::{shared, Gpu};
 use crate::transfer::read_back as read_back_bytes;
-use crate::upload::view_buffer;
 use shadowlab::error::Result;
-use shadowlab::math::{Aabb, Vec3};
+use shadowlab::math::Vec3;
 use shadowlab::techniques::{Frame, ShadowTechnique, Shadows, Stats};
-use shadowlab::view::ViewSamples;
 use wgpu::util::DeviceExt;
 
 /// A frame's shadow term on the device.
@@ -22,48 +21,6 @@ pub struct DeviceShadows {
     pub visibility: wgpu::Buffer,
     /// The frame's stages, counters and device, as `render` reports them.
     pub stats: Stats,
-}
-
-/// The camera pass's samples on the device ([`crate::upload::VIEW_STRIDE`] floats a
-/// pixel, row-major from the top row) with the few numbers of them a technique needs on the
-/// CPU: the covered pixels' count and the bounds of their positions (the receivers a light
-/// view is fitted to). Made by uploading the library's camera pass ([`DeviceView::upload`])
-/// or by the GPU's own ([`crate::camera_pass::on_device`]), which reads back no more than
-/// those numbers.
-pub struct DeviceView {
-    /// The samples.
-    pub samples: wgpu::Buffer,
-    /// Image width.
-    pub width: u32,
-    /// Image height.
-    pub height: u32,
-    /// Covered pixels.
-    pub covered: u64,
-    /// Bounds of the covered pixels' positions ([`ViewSamples::receiver_bounds`]).
-    pub receivers: Aabb,
-    /// True when the samples are the library's camera pass uploaded, the one the frame's
-    /// `view` holds; false when the GPU formed them and the frame's `view` holds no
-    /// per-pixel data.
-    pub uploaded: bool,
-}
-
-impl DeviceView {
-    /// The library's camera pass `view`, uploaded.
-    pub fn upload(gpu: &Gpu, view: &ViewSamples) -> Result<Self> {
-        Ok(DeviceView {
-            samples: view_buffer(gpu, view)?,
-            width: view.width,
-            height: view.height,
-            covered: view.covered_count() as u64,
-            receivers: view.receiver_bounds(),
-            uploaded: true,
-        })
-    }
-
-    /// Pixels in the image.
-    pub fn pixels(&self) -> u32 {
-        self.width * self.height
-    }
 }
 
 /// A technique whose shadow term can stay on the device.

@@ -22,6 +22,12 @@ pub const RAY_OFFSET: Common = Common {
     name: "ray_offset.wgsl",
     source: include_str!("shaders/common/ray_offset.wgsl"),
 };
+/// `shaders/common/camera_rays.wgsl`: the library's camera rays (`RaysU`, `camera_ray`)
+/// and error-bounded surface points (`surface_point`).
+pub const CAMERA_RAYS: Common = Common {
+    name: "camera_rays.wgsl",
+    source: include_str!("shaders/common/camera_rays.wgsl"),
+};
 /// `shaders/common/light.wgsl`: the light, its shadow ray and `illuminates` (after
 /// [`RAY_OFFSET`]).
 pub const LIGHT: Common = Common {
@@ -92,13 +98,14 @@ impl Stage {
         out
     }
 
-    /// A render pipeline of the stage's `vs` and `fs` over no vertex buffers (the stage
+    /// A render pipeline of the stage's `vs` and `fragment` over no vertex buffers (the stage
     /// reads its triangles from storage by vertex index), both faces drawn, a 32-bit float
     /// depth tested `Less` and written, and the colour `targets`: the light's depth map
     /// (none) and the camera's G-buffer share it.
     pub fn depth_tested_pipeline(
         &self,
         device: &wgpu::Device,
+        fragment: &str,
         targets: &[Option<wgpu::ColorTargetState>],
     ) -> wgpu::RenderPipeline {
         let module = self.module(device);
@@ -125,7 +132,7 @@ impl Stage {
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
-                entry_point: Some("fs"),
+                entry_point: Some(fragment),
                 compilation_options: Default::default(),
                 targets,
             }),

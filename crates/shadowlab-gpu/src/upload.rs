@@ -316,6 +316,37 @@ impl BvhBuffers {
     }
 }
 
+/// `RaysU` of `shaders/common/camera_rays.wgsl`: the camera's primary-ray generator.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct RaysU {
+    eye: [f32; 3],
+    parallel: u32,
+    forward: [f32; 3],
+    inv_width: f32,
+    right: [f32; 3],
+    inv_height: f32,
+    up: [f32; 3],
+    width: u32,
+}
+
+impl RaysU {
+    /// The primary rays of `camera` ([`shadowlab::camera::RayGenerator`]).
+    pub fn of(camera: &shadowlab::camera::Camera) -> Self {
+        let (eye, forward, right, up, inv_width, inv_height, parallel) = camera.rays().parts();
+        RaysU {
+            eye: eye.to_array(),
+            parallel: u32::from(parallel),
+            forward: forward.to_array(),
+            inv_width,
+            right: right.to_array(),
+            inv_height,
+            up: up.to_array(),
+            width: camera.width,
+        }
+    }
+}
+
 /// Floats a view sample takes on the GPU: position, its error bound, normal, triangle id
 /// (its bits).
 pub const VIEW_STRIDE: usize = 10;
@@ -358,5 +389,6 @@ mod tests {
         assert_eq!(std::mem::size_of::<MaterialU>(), 48);
         assert_eq!(std::mem::size_of::<LightU>(), 48);
         assert_eq!(std::mem::size_of::<ChildU>(), 32);
+        assert_eq!(std::mem::size_of::<RaysU>(), 64);
     }
 }

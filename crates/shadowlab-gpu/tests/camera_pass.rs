@@ -61,24 +61,6 @@ fn the_hardware_g_buffer_sees_the_cpu_pass_triangles() {
     }
 }
 
-/// The library's samples with no per-pixel data: what a frame holds when its camera pass
-/// stayed on the device.
-fn unsampled(c: &shadowlab::camera::Camera) -> ViewSamples {
-    ViewSamples {
-        width: c.width,
-        height: c.height,
-        triangle: Vec::new(),
-        position: Vec::new(),
-        position_error: Vec::new(),
-        normal: Vec::new(),
-        depth: Vec::new(),
-        dpdx: Vec::new(),
-        dpdy: Vec::new(),
-        camera: *c,
-        time_ms: 0.0,
-    }
-}
-
 #[test]
 fn the_pass_on_the_device_forms_the_samples_as_the_library_does() {
     if !have_gpu("the_pass_on_the_device_forms_the_samples_as_the_library_does") {
@@ -153,7 +135,7 @@ fn techniques_on_the_device_need_no_samples_on_the_cpu() {
     let (dv, _) = camera_pass::on_device(&gpu, &buffers, s.len(), &c).unwrap();
     let read = camera_pass::read_view(&gpu, &dv, &c).unwrap();
     let uploaded = DeviceView::upload(&gpu, &read).unwrap();
-    let empty = unsampled(&c);
+    let empty = ViewSamples::unsampled(&c);
     let terms = |t: &mut dyn shadowlab_gpu::resident::OnDevice, f: &Frame, v: &DeviceView| {
         let out = t.render_on_device(f, v).unwrap();
         read_back(&gpu, &out.visibility, u64::from(v.pixels()) * 12).unwrap()

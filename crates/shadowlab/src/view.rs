@@ -137,9 +137,18 @@ impl ViewSamples {
     /// Runs the camera pass, or fails with a sentence when its per-pixel buffers cannot
     /// be allocated.
     pub fn try_render(scene: &Scene, camera: &Camera) -> crate::error::Result<Self> {
-        let mut vs = ViewSamples {
-            width: 0,
-            height: 0,
+        let mut vs = Self::unsampled(camera);
+        vs.render_into(scene, camera)?;
+        Ok(vs)
+    }
+
+    /// The image size and camera of `camera` with no per-pixel data: what a frame holds
+    /// when its camera pass stayed elsewhere (on the GPU), for a technique that reads none
+    /// of it.
+    pub fn unsampled(camera: &Camera) -> Self {
+        ViewSamples {
+            width: camera.width,
+            height: camera.height,
             triangle: Vec::new(),
             position: Vec::new(),
             position_error: Vec::new(),
@@ -149,9 +158,7 @@ impl ViewSamples {
             dpdy: Vec::new(),
             camera: *camera,
             time_ms: 0.0,
-        };
-        vs.render_into(scene, camera)?;
-        Ok(vs)
+        }
     }
 
     /// Runs the camera pass into these samples' buffers, kept from an earlier frame: a

@@ -77,3 +77,13 @@ fn fs(v: Varyings) -> GBuffer {
     g.dpdy = vec4<f32>(dy, 0.0);
     return g;
 }
+
+// The triangle id alone, for the pass whose samples stage `samples` forms on the device
+// (`samples.wgsl`): one target of four bytes a pixel instead of the G-buffer's 68.
+@fragment
+fn fs_ids(v: Varyings) -> @location(0) u32 {
+    if cut_out(cam.masks, v.tri, v.bary) {
+        discard;
+    }
+    return v.tri;
+}

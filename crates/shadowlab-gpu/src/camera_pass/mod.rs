@@ -22,22 +22,66 @@ mod samples;
 
 pub use samples::{on_device, read_view};
 
-use crate::compute::render_pipeline;
+use crate::compute::render_pipeline_to;
 use crate::device::Gpu;
 use crate::shader::{Stage, ALPHA_MASK, RAY_OFFSET, TRIANGLES};
 use crate::transfer::{read_texture, uniform, Timer};
+use crate::upload::view_buffer;
 use crate::upload::SceneBuffers;
 use bytemuck::{Pod, Zeroable};
 use shadowlab::camera::Camera;
 use shadowlab::error::{Error, Result};
-use shadowlab::math::Vec3;
+use shadowlab::math::{Aabb, Vec3};
 use shadowlab::raster::NO_TRIANGLE;
+use shadowlab::view::ViewSamples;
 
 const GBUFFER: Stage = Stage {
     name: "gbuffer.wgsl",
     common: &[RAY_OFFSET, ALPHA_MASK, TRIANGLES],
     source: include_str!("gbuffer.wgsl"),
 };
+
+/// The camera pass's samples on the device ([`crate::upload::VIEW_STRIDE`] floats a
+/// pixel, row-major from the top row) with the few numbers of them a technique needs on the
+/// CPU: the covered pixels' count and the bounds of their positions (the receivers a light
+/// view is fitted to). Made by uploading the library's camera pass ([`DeviceView::upload`])
+/// or by the GPU's own ([`on_device`]), which reads back no more than
+/// those numbers.
+pub struct DeviceView {
+    /// The samples.
+    pub samples: wgpu::Buffer,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Covered pixels.
+    pub covered: u64,
+    /// Bounds of the covered pixels' positions ([`ViewSamples::receiver_bounds`]).
+    pub receivers: Aabb,
+    /// True when the samples are the library's camera pass uploaded, the one the frame's
+    /// `view` holds; false when the GPU formed them and the frame's `view` holds no
+    /// per-pixel data.
+    pub uploaded: bool,
+}
+
+impl DeviceView {
+    /// The library's camera pass `view`, uploaded.
+    pub fn upload(gpu: &Gpu, view: &ViewSamples) -> Result<Self> {
+        Ok(DeviceView {
+            samples: view_buffer(gpu, view)?,
+            width: view.width,
+            height: view.height,
+            covered: view.covered_count() as u64,
+            receivers: view.receiver_bounds(),
+            uploaded: true,
+        })
+    }
+
+    /// Pixels in the image.
+    pub fn pixels(&self) -> u32 {
+        self.width * self.height
+    }
+}
 
 /// The G-buffer's colour targets, in `gbuffer.wgsl`'s location order.
 const TARGETS: [wgpu::TextureFormat; 5] = [
@@ -47,6 +91,9 @@ const TARGETS: [wgpu::TextureFormat; 5] = [
     wgpu::TextureFormat::Rgba32Float,
     wgpu::TextureFormat::Rgba32Float,
 ];
+
+/// The triangle-id target alone, `gbuffer.wgsl`'s `fs_ids`: the pass left on the device.
+const IDS: [wgpu::TextureFormat; 1] = [wgpu::TextureFormat::R32Uint];
 
 /// `CameraU` of `gbuffer.wgsl`.
 #[repr(C)]
@@ -110,7 +157,14 @@ pub fn render(
     camera: &Camera,
 ) -> Result<GpuView> {
     let mut timer = Timer::new(gpu, 1);
-    let textures = draw(gpu, buffers, triangles, camera, &mut timer)?;
+    let textures = draw(
+        gpu,
+        buffers,
+        triangles,
+        camera,
+        (&TARGETS, "fs"),
+        &mut timer,
+    )?;
     let planes: Vec<Vec<u8>> = textures
         .iter()
         .map(|t| read_texture(gpu, t))
@@ -120,18 +174,20 @@ pub fn render(
 }
 
 /// Records and submits the G-buffer pass of `scene` (uploaded as `buffers`, `triangles`
-/// of them) from `camera`, timed by `timer` as `gbuffer`; returns its targets in
-/// [`TARGETS`]' order.
+/// of them) from `camera` into the targets `formats` written by fragment entry point
+/// `fragment` ([`TARGETS`] and `fs`, or [`IDS`] and `fs_ids`), timed by `timer` as
+/// `gbuffer`; returns the targets in that order.
 fn draw(
     gpu: &Gpu,
     buffers: &SceneBuffers,
     triangles: usize,
     camera: &Camera,
+    (formats, fragment): (&[wgpu::TextureFormat], &str),
     timer: &mut Timer,
 ) -> Result<Vec<wgpu::Texture>> {
     gpu.check_texture_side("the image width", camera.width)?;
     gpu.check_texture_side("the image height", camera.height)?;
-    let bytes: u32 = TARGETS
+    let bytes: u32 = formats
         .iter()
         .map(|f| f.block_copy_size(None).unwrap_or(16))
         .sum();
@@ -142,8 +198,8 @@ fn draw(
         )));
     }
     let targets: Vec<Option<wgpu::ColorTargetState>> =
-        TARGETS.iter().map(|&f| Some(f.into())).collect();
-    let pipe = render_pipeline(gpu, &GBUFFER, &targets);
+        formats.iter().map(|&f| Some(f.into())).collect();
+    let pipe = render_pipeline_to(gpu, &GBUFFER, fragment, &targets);
     let f = camera.forward();
     let cam = CameraU {
         clip_from_world: camera.clip_from_world().to_cols_array(),
@@ -165,7 +221,7 @@ fn draw(
             &buffers.texels,
         ]),
     });
-    let textures: Vec<wgpu::Texture> = TARGETS.iter().map(|&f| target(gpu, camera, f)).collect();
+    let textures: Vec<wgpu::Texture> = formats.iter().map(|&f| target(gpu, camera, f)).collect();
     let views: Vec<wgpu::TextureView> = textures
         .iter()
         .map(|t| t.create_view(&Default::default()))

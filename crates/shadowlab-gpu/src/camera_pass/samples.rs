@@ -4,13 +4,12 @@
 //! device ([`on_device`]), and the same samples read back into the library's
 //! [`ViewSamples`] for a technique on the CPU ([`read_view`]).
 
-use super::draw;
+use super::{draw, DeviceView, IDS};
 use crate::compute::pipeline;
 use crate::device::Gpu;
-use crate::resident::DeviceView;
-use crate::shader::{Stage, RAY_OFFSET};
+use crate::shader::{Stage, CAMERA_RAYS, RAY_OFFSET};
 use crate::transfer::{grid, output, read_back, uniform, Timer};
-use crate::upload::{SceneBuffers, VIEW_STRIDE};
+use crate::upload::{RaysU, SceneBuffers, VIEW_STRIDE};
 use bytemuck::{Pod, Zeroable};
 use shadowlab::camera::Camera;
 use shadowlab::error::{Error, Result};
@@ -20,7 +19,7 @@ use wgpu::util::DeviceExt;
 
 const SAMPLES: Stage = Stage {
     name: "samples.wgsl",
-    common: &[RAY_OFFSET],
+    common: &[RAY_OFFSET, CAMERA_RAYS],
     source: include_str!("samples.wgsl"),
 };
 
@@ -31,14 +30,7 @@ const WORKGROUP: u32 = 64;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct SamplesU {
-    eye: [f32; 3],
-    parallel: u32,
-    forward: [f32; 3],
-    inv_width: f32,
-    right: [f32; 3],
-    inv_height: f32,
-    up: [f32; 3],
-    width: u32,
+    rays: RaysU,
     height: u32,
     gamma7: f32,
     gamma16: f32,
@@ -68,18 +60,17 @@ pub fn on_device(
     let bytes = pixels * VIEW_STRIDE as u64 * 4;
     let samples = output(gpu, "the camera pass's samples", bytes)?;
     let mut timer = Timer::new(gpu, 2);
-    let targets = draw(gpu, buffers, triangles, camera, &mut timer)?;
+    let targets = draw(
+        gpu,
+        buffers,
+        triangles,
+        camera,
+        (&IDS, "fs_ids"),
+        &mut timer,
+    )?;
     let (gx, gy, row) = grid(gpu, pixels as u32, WORKGROUP);
-    let (eye, forward, right, up, inv_width, inv_height, parallel) = camera.rays().parts();
     let u = SamplesU {
-        eye: eye.to_array(),
-        parallel: u32::from(parallel),
-        forward: forward.to_array(),
-        inv_width,
-        right: right.to_array(),
-        inv_height,
-        up: up.to_array(),
-        width: camera.width,
+        rays: RaysU::of(camera),
         height: camera.height,
         gamma7: gamma(7),
         gamma16: gamma(16),

@@ -7,20 +7,15 @@
 // is uncovered, as on the CPU. Written in the layout every technique reads
 // (`upload::view_floats`: position, error bound, normal, triangle id's bits), with the
 // count of covered pixels and the bounds of their positions reduced alongside by integer
-// atomics on order-preserving keys: minimum, maximum and sum do not depend on the order
+// atomics on order-preserving keys, within each workgroup and then once a workgroup into
+// the summary (a global atomic a pixel would queue millions of threads on seven words):
+// minimum, maximum and sum do not depend on the order
 // the pixels ran in, so the summary is the same bits every run. The G-buffer discarded
-// the fragments alpha masks cut out already. Composed after shaders/common/ray_offset.wgsl.
+// the fragments alpha masks cut out already. Composed after
+// shaders/common/{ray_offset, camera_rays}.wgsl.
 
 struct SamplesU {
-    eye: vec3<f32>,
-    // 1 for parallel (orthographic) rays.
-    parallel: u32,
-    forward: vec3<f32>,
-    inv_width: f32,
-    right: vec3<f32>,
-    inv_height: f32,
-    up: vec3<f32>,
-    width: u32,
+    rays: RaysU,
     height: u32,
     // The library's gamma(7) and gamma(16), the error-bound factors of a surface point.
     gamma7: f32,
@@ -69,28 +64,27 @@ fn finite3(v: vec3<f32>) -> bool {
     return all(abs(v) <= vec3<f32>(3.4028235e38));
 }
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.y * cam.row + gid.x;
-    if k >= cam.width * cam.height {
-        return;
+// This workgroup's share of the summary, added to `summary` once by its first threads: a
+// global atomic per pixel would queue two million threads on seven words.
+var<workgroup> local: array<atomic<u32>, 7>;
+
+// Pixel `k`'s sample written to `view`; its position when covered.
+fn form(k: u32) -> Sample {
+    let none = Sample(false, vec3<f32>(0.0));
+    let width = cam.rays.width;
+    if k >= width * cam.height {
+        return none;
     }
-    let x = k % cam.width;
-    let y = k / cam.width;
+    let x = k % width;
+    let y = k / width;
     let tri = textureLoad(ids, vec2<u32>(x, y), 0).x;
     if tri == NO_TRIANGLE {
         write_uncovered(k);
-        return;
+        return none;
     }
-    // RayGenerator::ray through the pixel's centre.
-    let nx = (f32(x) + 0.5) * cam.inv_width * 2.0 - 1.0;
-    let ny = 1.0 - (f32(y) + 0.5) * cam.inv_height * 2.0;
-    var o = cam.eye;
-    var d = cam.forward + cam.right * nx + cam.up * ny;
-    if cam.parallel != 0u {
-        o = cam.eye + (cam.right * nx + cam.up * ny);
-        d = cam.forward;
-    }
+    let ray = camera_ray(cam.rays, f32(x) + 0.5, f32(y) + 0.5);
+    let o = ray.o;
+    let d = ray.d;
     // intersect_plane: barycentrics of the ray's meeting with the triangle's plane.
     let v0 = corner(tri, 0u);
     let v1 = corner(tri, 1u);
@@ -101,7 +95,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let det = dot3(e1, p);
     if det == 0.0 || !(abs(det) <= 3.4028235e38) {
         write_uncovered(k);
-        return;
+        return none;
     }
     let inv = 1.0 / det;
     let s = o - v0;
@@ -109,11 +103,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = cross3(s, e1);
     let b2 = dot3(d, q) * inv;
     let b0 = 1.0 - b1 - b2;
-    // SurfacePoint::from_barycentrics.
-    let point = v0 * b0 + v1 * b1 + v2 * b2;
-    let mag = abs(v0 * b0) + abs(v1 * b1) + abs(v2 * b2);
-    let vmag = max(max(abs(v0), abs(v1)), abs(v2));
-    let err = mag * cam.gamma7 + vmag * cam.gamma16;
+    let sp = surface_point(v0, v1, v2, vec3<f32>(b0, b1, b2), cam.gamma7, cam.gamma16);
+    let point = sp.p;
+    let err = sp.err;
     // The face normal, turned against the ray (glam's normalize_or_zero).
     let c = cross3(e1, e2);
     let len2 = dot3(c, c);
@@ -126,7 +118,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     if !finite3(point) || all(n == vec3<f32>(0.0)) {
         write_uncovered(k);
-        return;
+        return none;
     }
     let base = k * VIEW_STRIDE;
     view[base] = point.x;
@@ -139,10 +131,44 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     view[base + 7u] = n.y;
     view[base + 8u] = n.z;
     view[base + 9u] = bitcast<f32>(tri);
-    atomicAdd(&summary[0], 1u);
-    for (var i = 0u; i < 3u; i++) {
-        let key = order_key(point[i]);
-        atomicMin(&summary[1u + i], key);
-        atomicMax(&summary[4u + i], key);
+    return Sample(true, point);
+}
+
+struct Sample {
+    covered: bool,
+    point: vec3<f32>,
+}
+
+@compute @workgroup_size(64)
+fn main(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(local_invocation_index) li: u32,
+) {
+    // The count from zero, the minima from the largest key, the maxima from the smallest.
+    if li < 7u {
+        atomicStore(&local[li], select(0u, 0xffffffffu, li >= 1u && li <= 3u));
+    }
+    workgroupBarrier();
+    let sample = form(gid.y * cam.row + gid.x);
+    if sample.covered {
+        atomicAdd(&local[0], 1u);
+        for (var i = 0u; i < 3u; i++) {
+            let key = order_key(sample.point[i]);
+            atomicMin(&local[1u + i], key);
+            atomicMax(&local[4u + i], key);
+        }
+    }
+    workgroupBarrier();
+    if li < 7u {
+        let v = atomicLoad(&local[li]);
+        if li == 0u {
+            if v > 0u {
+                atomicAdd(&summary[0], v);
+            }
+        } else if li <= 3u {
+            atomicMin(&summary[li], v);
+        } else {
+            atomicMax(&summary[li], v);
+        }
     }
 }

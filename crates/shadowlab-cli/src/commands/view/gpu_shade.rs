@@ -179,19 +179,6 @@ impl GpuShading {
         let mut camera = *camera;
         camera.fit_depth_range(&scene.bounds);
         camera.validate()?;
-        let unsampled = || ViewSamples {
-            width: camera.width,
-            height: camera.height,
-            triangle: Vec::new(),
-            position: Vec::new(),
-            position_error: Vec::new(),
-            normal: Vec::new(),
-            depth: Vec::new(),
-            dpdx: Vec::new(),
-            dpdy: Vec::new(),
-            camera,
-            time_ms: 0.0,
-        };
         if let (Some(p), Some(on)) = (previous, previous_on) {
             if p.gpu_camera_pass && p.camera == camera {
                 let kept = vec![("camera pass (GPU, kept)".to_string(), 0.0)];
@@ -204,7 +191,7 @@ impl GpuShading {
         let stages = vec![("camera pass (GPU)".to_string(), frame::ms(t0))];
         Ok((
             camera,
-            unsampled(),
+            ViewSamples::unsampled(&camera),
             device_view,
             stages,
             times.into_iter().collect(),

@@ -34,9 +34,9 @@
 use crate::compute::{bind, pipeline};
 use crate::device::{shared, Gpu};
 use crate::resident::{self, DeviceView, ShadowTerm};
-use crate::shader::{Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, TRIANGLES, WATERTIGHT};
+use crate::shader::{Stage, ALPHA_MASK, CAMERA_RAYS, LIGHT, RAY_OFFSET, TRIANGLES, WATERTIGHT};
 use crate::transfer::{grid, output, uniform, Timer};
-use crate::upload::{BvhBuffers, LightU, SceneBuffers, SceneKey};
+use crate::upload::{BvhBuffers, LightU, RaysU, SceneBuffers, SceneKey};
 use bytemuck::{Pod, Zeroable};
 use shadowlab::error::{Error, Result};
 use shadowlab::math::{gamma, Vec2};
@@ -51,7 +51,14 @@ pub const NAME: &str = "gpu:raytrace";
 /// `trace.wgsl`, composed after the common files it uses.
 const TRACE: Stage = Stage {
     name: "trace.wgsl",
-    common: &[RAY_OFFSET, LIGHT, WATERTIGHT, ALPHA_MASK, TRIANGLES],
+    common: &[
+        RAY_OFFSET,
+        LIGHT,
+        WATERTIGHT,
+        ALPHA_MASK,
+        TRIANGLES,
+        CAMERA_RAYS,
+    ],
     source: include_str!("trace.wgsl"),
 };
 
@@ -183,14 +190,7 @@ impl ShadowTerm for GpuRayTrace {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct CameraU {
-    eye: [f32; 3],
-    parallel: u32,
-    forward: [f32; 3],
-    inv_width: f32,
-    right: [f32; 3],
-    inv_height: f32,
-    up: [f32; 3],
-    width: u32,
+    rays: RaysU,
     spp: u32,
     gamma7: f32,
     gamma16: f32,
@@ -253,16 +253,9 @@ fn supersample(
     let gpu = &res.gpu;
     let (params, groups) = trace_params(gpu, res, frame, view);
     let params = uniform(gpu, "trace parameters", &params);
-    let (eye, forward, right, up, inv_width, inv_height, parallel) = frame.camera.rays().parts();
+    let rays = RaysU::of(frame.camera);
     let cam = |first: u32| CameraU {
-        eye: eye.to_array(),
-        parallel: u32::from(parallel),
-        forward: forward.to_array(),
-        inv_width,
-        right: right.to_array(),
-        inv_height,
-        up: up.to_array(),
-        width: view.width,
+        rays,
         spp: samples.len() as u32,
         gamma7: gamma(7),
         gamma16: gamma(16),

@@ -247,16 +247,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 // The library's `RayGenerator` and the sub-pixel grid.
 struct CameraU {
-    eye: vec3<f32>,
-    // 1 for parallel (orthographic) rays.
-    parallel: u32,
-    forward: vec3<f32>,
-    inv_width: f32,
-    right: vec3<f32>,
-    inv_height: f32,
-    up: vec3<f32>,
-    // Image width in pixels.
-    width: u32,
+    rays: RaysU,
     // Sub-pixel positions per pixel.
     spp: u32,
     // The library's gamma(7) and gamma(16), the error-bound factors of a hit point.
@@ -274,21 +265,6 @@ struct CameraU {
 @group(0) @binding(11) var<uniform> cam: CameraU;
 // Per pixel, the sum so far of its sub-pixel rays' shadow terms (xyz) and their number (w).
 @group(0) @binding(12) var<storage, read_write> accum: array<vec4<f32>>;
-
-struct Ray {
-    o: vec3<f32>,
-    d: vec3<f32>,
-}
-
-// The library's `RayGenerator::ray`.
-fn primary_ray(x: f32, y: f32) -> Ray {
-    let nx = x * cam.inv_width * 2.0 - 1.0;
-    let ny = 1.0 - y * cam.inv_height * 2.0;
-    if cam.parallel != 0u {
-        return Ray(cam.eye + (cam.right * nx + cam.up * ny), cam.forward);
-    }
-    return Ray(cam.eye, cam.forward + cam.right * nx + cam.up * ny);
-}
 
 struct Closest {
     tri: u32,
@@ -382,8 +358,8 @@ fn supersample(@builtin(global_invocation_id) gid: vec3<u32>) {
     let done = cam.first + cam.round >= cam.spp;
     var v = vec3<f32>(1.0);
     if own != NO_TRIANGLE {
-        let px = f32(k % cam.width);
-        let py = f32(k / cam.width);
+        let px = f32(k % cam.rays.width);
+        let py = f32(k / cam.rays.width);
         // The sum of the shadow terms of the sub-pixel rays that hit (xyz) and their
         // number (w), over the rounds so far: one sum in sample order, as one loop would
         // take it.
@@ -393,19 +369,13 @@ fn supersample(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         for (var i = cam.first; i < min(cam.first + cam.round, cam.spp); i++) {
             let s = subpixel[i];
-            let ray = primary_ray(px + s.x, py + s.y);
+            let ray = camera_ray(cam.rays, px + s.x, py + s.y);
             let hit = closest_hit(ray.o, ray.d);
             if hit.tri == NO_TRIANGLE {
                 continue;
             }
-            let v0 = vertex(hit.tri, 0u) * hit.b.x;
-            let v1 = vertex(hit.tri, 1u) * hit.b.y;
-            let v2 = vertex(hit.tri, 2u) * hit.b.z;
-            let hp = v0 + v1 + v2;
-            let mag = abs(v0) + abs(v1) + abs(v2);
-            let vmag = max(max(abs(vertex(hit.tri, 0u)), abs(vertex(hit.tri, 1u))), abs(vertex(hit.tri, 2u)));
-            let herr = mag * cam.gamma7 + vmag * cam.gamma16;
-            acc = vec4<f32>(acc.xyz + transmittance(hp, herr, facing_normal(hit.tri, ray.d), hit.tri), acc.w + 1.0);
+            let sp = surface_point(vertex(hit.tri, 0u), vertex(hit.tri, 1u), vertex(hit.tri, 2u), hit.b, cam.gamma7, cam.gamma16);
+            acc = vec4<f32>(acc.xyz + transmittance(sp.p, sp.err, facing_normal(hit.tri, ray.d), hit.tri), acc.w + 1.0);
         }
         if !done {
             accum[k] = acc;
