@@ -25,6 +25,8 @@ const SAMPLES: Stage = Stage {
 
 /// Invocations a workgroup of `samples.wgsl`.
 const WORKGROUP: u32 = 64;
+/// Pixels an invocation of `samples.wgsl` forms (its `PER_THREAD`).
+const PER_THREAD: u32 = 16;
 
 /// `SamplesU` of `samples.wgsl`.
 #[repr(C)]
@@ -68,7 +70,7 @@ pub fn on_device(
         (&IDS, "fs_ids"),
         &mut timer,
     )?;
-    let (gx, gy, row) = grid(gpu, pixels as u32, WORKGROUP);
+    let (gx, gy, row) = grid(gpu, (pixels as u32).div_ceil(PER_THREAD), WORKGROUP);
     let u = SamplesU {
         rays: RaysU::of(camera),
         height: camera.height,
