@@ -9,7 +9,6 @@ mod support;
 
 use shadowlab::compare::compare;
 use shadowlab::embree::EmbreeScene;
-use shadowlab::light::Light;
 use shadowlab::math::{vec2, vec3};
 use shadowlab::reference::Reference;
 use shadowlab::scene::{self, Scene};
