@@ -12,7 +12,7 @@
 //! the binary tree is rebuilt by splitting the primitive list at its median along the
 //! longest axis of the centroids' bounds, which is at most ⌈log₂ n⌉ deep whatever the
 //! geometry. PLOC's pairing is also slow on equal boxes (a few merges a pass), so a scene
-//! with more than [`MAX_REPEATS`] primitives in one box goes to the median split directly. Either tree holds every primitive, so the traced answer is the same; only
+//! with more than `MAX_REPEATS` primitives in one box goes to the median split directly. Either tree holds every primitive, so the traced answer is the same; only
 //! its speed differs.
 
 use crate::math::Vec3A;

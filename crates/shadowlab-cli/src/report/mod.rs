@@ -14,7 +14,7 @@
 //!
 //! The sections, top of the flow first: [`plots`] (the SVG files), [`html`] (the page,
 //! section by section, with [`tables`] for the metrics table and [`dump`] for the
-//! gallery), over [`rows`] (what the page reads off the metrics), [`format`] (escaping,
+//! gallery), over [`rows`] (what the page reads off the metrics), [`format`](mod@format) (escaping,
 //! URLs, cells) and [`assets`] (style sheet and script). [`crops`] finds the worst error
 //! regions and writes their images while `compare` measures.
 

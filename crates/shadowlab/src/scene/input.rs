@@ -10,7 +10,7 @@ use std::path::Path;
 /// The most triangles a scene may hold; larger scenes are refused before allocation.
 pub const MAX_TRIANGLES: usize = 50_000_000;
 
-/// Triangles [`Scene::place_camera`] adds as the ground plane under a bare mesh; loaders
+/// Triangles [`Scene::place_camera`](crate::scene::Scene::place_camera) adds as the ground plane under a bare mesh; loaders
 /// count them in before they compare a file's triangles with [`MAX_TRIANGLES`].
 pub const GROUND_TRIANGLES: usize = 2;
 

@@ -15,7 +15,7 @@ pub struct Material {
     /// caster, (0.9, 0.9, 0.9) for a 10%-opaque one.
     pub transmittance: Vec3,
     /// The texture alpha that cuts the triangles out where it is below a cut-off (glTF's
-    /// `alphaMode: MASK`); their texture coordinates are [`Scene::uv`]. Not serialized.
+    /// `alphaMode: MASK`); their texture coordinates are [`Scene::uv`](crate::scene::Scene::uv). Not serialized.
     #[serde(skip)]
     pub alpha_mask: Option<AlphaMask>,
 }

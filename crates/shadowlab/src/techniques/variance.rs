@@ -3,7 +3,7 @@
 //!
 //! The map stores the first two moments of the depth distribution, `z` and `z²`; being
 //! linear, they can be blurred and mip-mapped like any texture. A look-up recovers the
-//! filtered mean μ and variance σ² = E[z²] − μ² and bounds the lit fraction of a receiver at
+//! filtered mean μ and variance σ² = E\[z²\] − μ² and bounds the lit fraction of a receiver at
 //! depth `d > μ` with the one-tailed Chebyshev inequality `p_max = σ² / (σ² + (d − μ)²)`.
 //!
 //! Invariants: moments are of the linear light depth normalized (to `[0, 1]`) over the

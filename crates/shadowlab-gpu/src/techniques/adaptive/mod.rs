@@ -20,7 +20,7 @@
 //!    receiver disagree on its shadow test (it straddles a boundary), requests the page one
 //!    level finer. Requests come back as a set, each with its benefit (the paper's: the
 //!    requesting receivers, mismatched pixels that straddle a boundary).
-//! 2. **allocate** (`allocate.wgsl` and [`pool`]): the requests, by decreasing benefit
+//! 2. **allocate** (`allocate.wgsl` and `pool`): the requests, by decreasing benefit
 //!    (ties in table order, coarsest level first), take free slots, then the least
 //!    recently read slots not read this frame (LRU eviction; ties by slot), at most
 //!    `max-new-nodes` a frame; the page table gets the new entries and loses the evicted
@@ -29,7 +29,7 @@
 //!    (one render pass, a viewport a page) through the page's own `clip_from_world`,
 //!    keeping the nearest triangle's id; a page draws only the triangles of its cell, a
 //!    page of the coarsest level, whose list (the paper's culling, Section 4.3) is made
-//!    once per map ([`culling`]).
+//!    once per map (`culling`).
 //!
 //! Then **lookup** (`lookup.wgsl`): every receiver reads the finest resident page over it
 //! and applies Section 4.2's test: lit when the texel holds its own triangle, else when the

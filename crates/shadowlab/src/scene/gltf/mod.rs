@@ -24,7 +24,7 @@
 //!   (`textures`): PNG and GIF are decoded, a JPEG has no alpha and is opaque; one that
 //!   cannot be read leaves its material opaque and is named in the warnings.
 //!   `KHR_texture_transform` is not read (the extension warnings say so). A
-//!   primitive without a material gets [`Material::default`]. Material extensions
+//!   primitive without a material gets [`Material::default`](crate::scene::Material). Material extensions
 //!   (`KHR_materials_transmission`, `…_volume`, …) are ignored.
 //! - The camera nodes met in that walk, in order; the one at the asked index
 //!   ([`load_with_camera`], the first by default): eye at the node's origin, looking down

@@ -98,16 +98,16 @@
 
 //!
 //! # Where each stage lives
-//! - [`tree`]: the hierarchical grid (Section 3): nodes, cells, light views, the walk down.
-//! - [`roots`]: step 1, the root of each light view; [`culling`]: Section 4.3's culling
+//! - `tree`: the hierarchical grid (Section 3): nodes, cells, light views, the walk down.
+//! - `roots`: step 1, the root of each light view; `culling`: Section 4.3's culling
 //!   lists per root cell.
-//! - [`analysis`]: step 2's benefit, the resolution-mismatched pixels that straddle a
-//!   discontinuity (Sections 3.1, 4.1, 4.3); [`cost`]: the cost model, its calibration and
+//! - `analysis`: step 2's benefit, the resolution-mismatched pixels that straddle a
+//!   discontinuity (Sections 3.1, 4.1, 4.3); `cost`: the cost model, its calibration and
 //!   the ranking by benefit over cost (Section 3.1).
-//! - [`node_creation`]: step 3, the refinement passes and the rendering of new tiles
-//!   (Section 3.1); [`node_removal`]: the LRU and benefit eviction (Section 3.2).
-//! - [`lookup`]: step 4, the queries with Section 4.2's id and depth test.
-//! - [`params`]: the parameters; [`dump`]: the pictures of the tree.
+//! - `node_creation`: step 3, the refinement passes and the rendering of new tiles
+//!   (Section 3.1); `node_removal`: the LRU and benefit eviction (Section 3.2).
+//! - `lookup`: step 4, the queries with Section 4.2's id and depth test.
+//! - `params`: the parameters; `dump`: the pictures of the tree.
 
 mod analysis;
 mod cost;

@@ -133,7 +133,7 @@ impl<T: Channel> FilteredMaps<T> {
     }
 
     /// Renders the light's depth maps at the layout's resolution, fits their depth ranges
-    /// ([`fit_ranges`]), encodes them with an encoder of whole rows that stores the
+    /// (`fit_ranges`), encodes them with an encoder of whole rows that stores the
     /// texture's format itself, then blurs and mip-maps as `settings` says; records the
     /// stages `shadow_map`, `fit`, `encode`, `blur` and `mipmap` in `stats`.
     /// `encoder(range)` is called once per view, inside the `encode` stage (so it may

@@ -117,14 +117,14 @@ impl<'a> MinPyramid<'a> {
 }
 
 /// The light depths that matter to the receivers of one light view, from which
-/// [`DepthRange::fitted`] takes its interval.
+/// [`DepthRange::fitted`](super::depth_range::DepthRange::fitted) takes its interval.
 ///
 /// A receiver *may be shadowed* when some map texel under its filter support (the texels its
 /// look-up can read: the footprint's parallelogram, the bilinear and mip-level spill of the
 /// level of detail it uses, and `pad` texels more for the blur) is nearer than its own surface
 /// there: nearer than its depth minus the depth change of its tangent plane across the
 /// support and one texel. A receiver that cannot be shadowed is lit whatever the interval
-/// (see [`DepthRange::fitted`]), so the interval need only cover the others: on a wide
+/// (see [`DepthRange::fitted`](super::depth_range::DepthRange::fitted)), so the interval need only cover the others: on a wide
 /// ground under a low sun this is the ground round the casters, not the whole visible ground.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReceiverDepths {

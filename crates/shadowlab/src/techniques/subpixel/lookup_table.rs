@@ -271,7 +271,7 @@ impl<M: Mask> Lut<M> {
     }
 }
 
-/// A pattern's half-plane look-up table as [`Subpixel`] builds it once per pattern and
+/// A pattern's half-plane look-up table as [`Subpixel`](super::Subpixel) builds it once per pattern and
 /// sample count, for a twin that uploads it (the GPU's `gpu:subpixel`).
 #[derive(Clone, Debug)]
 pub struct LookupTable {

@@ -204,7 +204,7 @@ pub(super) fn silhouette_edges(adj: &Adjacency, toward: &Toward) -> Vec<u32> {
 }
 
 /// The scene's edges as the silhouette test reads them, built once per scene as
-/// [`Subpixel`] builds them (vertices welded by bit-identical position).
+/// [`Subpixel`](super::Subpixel) builds them (vertices welded by bit-identical position).
 #[derive(Clone, Debug)]
 pub struct EdgeAdjacency {
     /// First endpoint of each edge.
