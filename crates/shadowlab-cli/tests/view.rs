@@ -744,3 +744,68 @@ fn a_small_window_scrolls_the_panel_to_its_last_widget() {
     }
     assert!(levels.len() > 16, "the map shows depths: {levels:?}");
 }
+
+#[test]
+fn benchmark_frames_time_every_stage_with_the_gpus_own() {
+    let Some(x) = Xvfb::start() else {
+        eprintln!("skipping the viewer's benchmark: Xvfb is not installed (.ci/run installs it)");
+        return;
+    };
+    if !have_gpu("the viewer's benchmark") {
+        return;
+    }
+    let d = tmp("benchmark");
+    let bench = |technique: &str| {
+        let r = view(
+            &d,
+            Some(&x.display),
+            &[
+                "--scene",
+                "chessboard",
+                "--width",
+                "160",
+                "--height",
+                "120",
+                "--technique",
+                technique,
+                "--error-overlay",
+                "--benchmark-frames",
+                "3",
+            ],
+        );
+        support::ok(&r);
+        r.stdout
+    };
+    // A gpu: technique on the device: the GPU's camera pass, each frame drawn anew (the
+    // camera turns), its two stages timed by timestamp queries, the error traced there.
+    let out = bench("gpu:sm");
+    let first = out.lines().next().unwrap_or_default();
+    assert!(first.starts_with("gpu:sm: 3 frames, "), "{out}");
+    let fps: f64 = first
+        .split(", ")
+        .find_map(|p| p.strip_suffix(" frames per second"))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no frame rate: {first}"));
+    assert!(fps > 0.0, "{first}");
+    for stage in [
+        "camera pass (GPU)",
+        "shade (GPU)",
+        "error vs gpu:raytrace",
+        "panel, present",
+        "adapter: ",
+    ] {
+        assert!(out.contains(stage), "no {stage:?} in {out}");
+    }
+    if out.contains("GPU stages") {
+        for stage in ["gpu gbuffer", "gpu samples", "gpu shadow_map", "gpu lookup"] {
+            assert!(out.contains(stage), "no {stage:?} in {out}");
+        }
+    }
+    // A CPU technique: the library's camera pass and the image uploaded.
+    let out = bench("sm");
+    assert!(out.starts_with("sm: 3 frames, "), "{out}");
+    assert!(
+        out.contains("camera pass ") && !out.contains("camera pass (GPU)"),
+        "{out}"
+    );
+}
