@@ -4,8 +4,9 @@
 //! camera (the library's pass uploaded instead for a technique that reads the samples on
 //! the CPU), the technique run over it, the view shaded into the window's texture
 //! (`shade.wgsl`) and, when the error overlay is on, `gpu:raytrace` traced over the same
-//! samples and compared on the device — nothing read back but the error's four sums and
-//! the timestamp queries.
+//! samples and compared on the device — nothing read back but the camera pass's seven
+//! words (covered count, receivers' bounds), the error's four sums and the timestamp
+//! queries.
 
 use super::frame::{self, Drawn};
 use super::screenshot::ErrorFigures;
