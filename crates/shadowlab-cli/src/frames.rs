@@ -28,14 +28,20 @@ pub struct Pass {
     pub layers: Option<ViewLayers>,
 }
 
+/// The camera of frame `i` of `setup`, checked.
+fn frame_camera(setup: &Setup, i: usize) -> Result<Camera> {
+    let camera = setup.camera_at(i);
+    camera
+        .validate()
+        .with_context(|| format!("frame {i} of the camera path of {}", setup.scene.name))?;
+    Ok(camera)
+}
+
 impl Pass {
     /// Renders frame `i` of `setup`, into the buffers of the `previous` frame's camera
     /// pass when one is handed back (a sequence keeps one pass's memory across frames).
     pub fn render(setup: &Setup, i: usize, previous: Option<Pass>) -> Result<Pass> {
-        let camera = setup.camera_at(i);
-        camera
-            .validate()
-            .with_context(|| format!("frame {i} of the camera path of {}", setup.scene.name))?;
+        let camera = frame_camera(setup, i)?;
         let view = match previous {
             Some(mut p) => {
                 p.view.render_into(&setup.scene, &camera)?;
@@ -43,25 +49,13 @@ impl Pass {
             }
             None => ViewSamples::try_render(&setup.scene, &camera)?,
         };
-        let layers = if setup.layers {
-            Some(ViewLayers::render(&setup.scene, &camera, &view)?)
-        } else {
-            None
-        };
-        Ok(Pass {
-            camera,
-            view,
-            layers,
-        })
+        Self::with_layers(setup, camera, view)
     }
 
     /// Renders frame `i` of `setup` with the GPU's camera pass
     /// ([`shadowlab_gpu::camera_pass::on_device`]), its samples read back.
     pub fn render_on_gpu(setup: &Setup, i: usize) -> Result<Pass> {
-        let camera = setup.camera_at(i);
-        camera
-            .validate()
-            .with_context(|| format!("frame {i} of the camera path of {}", setup.scene.name))?;
+        let camera = frame_camera(setup, i)?;
         let t0 = std::time::Instant::now();
         let gpu = shadowlab_gpu::device::shared().map_err(|e| match e {
             shadowlab::error::Error::Internal(m) => anyhow::anyhow!("the GPU camera pass: {m}"),
@@ -73,8 +67,14 @@ impl Pass {
             shadowlab_gpu::camera_pass::on_device(&gpu, &buffers, scene.len(), &camera)?;
         let mut view = shadowlab_gpu::camera_pass::read_view(&gpu, &on_device, &camera)?;
         view.time_ms = t0.elapsed().as_secs_f64() * 1e3;
+        Self::with_layers(setup, camera, view)
+    }
+
+    /// The pass of `camera` and its samples `view`, with the layers behind
+    /// semi-transparent surfaces when `setup` asks for them.
+    fn with_layers(setup: &Setup, camera: Camera, view: ViewSamples) -> Result<Pass> {
         let layers = if setup.layers {
-            Some(ViewLayers::render(scene, &camera, &view)?)
+            Some(ViewLayers::render(&setup.scene, &camera, &view)?)
         } else {
             None
         };
