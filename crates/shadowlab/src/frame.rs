@@ -44,7 +44,7 @@ pub struct Frame<'a> {
     pub dump: Option<&'a dyn DumpSink>,
     /// The surfaces behind semi-transparent nearest surfaces, when the caller wants them
     /// shaded too (see [`ViewLayers`]); techniques that support them return their shadow
-    /// terms in [`Shadows::layers`](crate::techniques::Shadows::layers).
+    /// terms in `Shadows::layers`.
     pub layers: Option<&'a ViewLayers>,
 }
 
