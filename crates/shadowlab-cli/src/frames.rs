@@ -28,6 +28,25 @@ pub struct Pass {
     pub layers: Option<ViewLayers>,
 }
 
+/// The scene on the GPU, for its camera pass (`render --camera-pass gpu`): uploaded once
+/// for every frame of a sequence.
+pub struct GpuScene {
+    gpu: std::sync::Arc<shadowlab_gpu::device::Gpu>,
+    buffers: shadowlab_gpu::upload::SceneBuffers,
+}
+
+impl GpuScene {
+    /// `setup`'s scene uploaded to the shared device; no adapter is the user's error.
+    pub fn new(setup: &Setup) -> Result<Self> {
+        let gpu = shadowlab_gpu::device::shared().map_err(|e| match e {
+            shadowlab::error::Error::Internal(m) => anyhow::anyhow!("the GPU camera pass: {m}"),
+            e => crate::failure::bad_input(format!("--camera-pass gpu needs a GPU and {e}")),
+        })?;
+        let buffers = shadowlab_gpu::upload::SceneBuffers::new(&gpu, &setup.scene)?;
+        Ok(GpuScene { gpu, buffers })
+    }
+}
+
 /// The camera of frame `i` of `setup`, checked.
 fn frame_camera(setup: &Setup, i: usize) -> Result<Camera> {
     let camera = setup.camera_at(i);
@@ -53,19 +72,15 @@ impl Pass {
     }
 
     /// Renders frame `i` of `setup` with the GPU's camera pass
-    /// ([`shadowlab_gpu::camera_pass::on_device`]), its samples read back.
-    pub fn render_on_gpu(setup: &Setup, i: usize) -> Result<Pass> {
+    /// ([`shadowlab_gpu::camera_pass::on_device`]) over the scene uploaded once (`gpu`),
+    /// its samples read back.
+    pub fn render_on_gpu(setup: &Setup, i: usize, gpu: &GpuScene) -> Result<Pass> {
         let camera = frame_camera(setup, i)?;
         let t0 = std::time::Instant::now();
-        let gpu = shadowlab_gpu::device::shared().map_err(|e| match e {
-            shadowlab::error::Error::Internal(m) => anyhow::anyhow!("the GPU camera pass: {m}"),
-            e => crate::failure::bad_input(format!("--camera-pass gpu needs a GPU and {e}")),
-        })?;
-        let scene = &setup.scene;
-        let buffers = shadowlab_gpu::upload::SceneBuffers::new(&gpu, scene)?;
+        let (g, buffers) = (&gpu.gpu, &gpu.buffers);
         let (on_device, _) =
-            shadowlab_gpu::camera_pass::on_device(&gpu, &buffers, scene.len(), &camera)?;
-        let mut view = shadowlab_gpu::camera_pass::read_view(&gpu, &on_device, &camera)?;
+            shadowlab_gpu::camera_pass::on_device(g, buffers, setup.scene.len(), &camera)?;
+        let mut view = shadowlab_gpu::camera_pass::read_view(g, &on_device, &camera)?;
         view.time_ms = t0.elapsed().as_secs_f64() * 1e3;
         Self::with_layers(setup, camera, view)
     }

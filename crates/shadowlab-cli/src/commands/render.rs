@@ -6,7 +6,7 @@
 //! exported scene, the stats file — and say what was done.
 
 use crate::config::{RenderConfig, RenderOutputs, Setup};
-use crate::frames::{Pass, Run};
+use crate::frames::{GpuScene, Pass, Run};
 use crate::metrics::{
     self, AreaRecord, CameraRecord, Figures, LightRecord, RenderStats, SceneRecord,
 };
@@ -58,10 +58,15 @@ fn render_frames(
     } else {
         None
     };
+    let gpu_scene = if gpu_pass {
+        Some(GpuScene::new(setup)?)
+    } else {
+        None
+    };
     let mut last = None;
     for i in 0..setup.frames {
-        let pass = if gpu_pass {
-            Pass::render_on_gpu(setup, i)?
+        let pass = if let Some(g) = &gpu_scene {
+            Pass::render_on_gpu(setup, i, g)?
         } else {
             Pass::render(setup, i, last.take())?
         };
