@@ -4,26 +4,12 @@
 
 mod support;
 
-use std::process::Command;
 use support::{metrics, quiet, refused, run_ok, shadowlab, tmp, Capture};
-
-/// `shadowlab` (which has a private runtime folder, so the Vulkan loader's window-system
-/// probes print nothing).
-fn gpu_run(_dir: &std::path::Path) -> Command {
-    shadowlab()
-}
-
-/// [`gpu_run`] with `--quiet`.
-fn gpu_quiet(dir: &std::path::Path) -> Command {
-    let mut c = gpu_run(dir);
-    c.arg("--quiet");
-    c
-}
 
 /// True when a GPU adapter is there; under `CI=true` its absence fails the test, elsewhere
 /// the test is skipped with the reason.
 fn have_gpu(test: &str, dir: &std::path::Path) -> bool {
-    let r = gpu_quiet(dir)
+    let r = quiet()
         .args([
             "render",
             "--scene",
@@ -61,7 +47,7 @@ fn compare_puts_cpu_and_gpu_side_by_side_with_the_adapter() {
     let out = dir.join("report");
     // Not quiet: the table's line naming the adapter is checked.
     let r = run_ok(
-        gpu_run(&dir)
+        shadowlab()
             .args([
                 "compare",
                 "--scene",
@@ -107,7 +93,7 @@ fn gpu_names_work_wherever_a_technique_is_named() {
         "{}",
         r.stdout
     );
-    let r = gpu_quiet(&dir)
+    let r = quiet()
         .args(["render", "--scene", "chessboard", "--technique", "gpu:sm"])
         .args(["--param", "resolution=99999", "--output"])
         .arg(dir.join("x.png"))
@@ -120,7 +106,7 @@ fn gpu_names_work_wherever_a_technique_is_named() {
 #[test]
 fn an_adapter_that_is_not_there_is_named() {
     let dir = tmp("gpu-adapter");
-    let r = gpu_quiet(&dir)
+    let r = quiet()
         .args([
             "--adapter",
             "no-such-adapter-anywhere",
@@ -157,7 +143,7 @@ fn all_and_gpu_all_put_each_pair_side_by_side() {
     }
     let out = dir.join("report");
     run_ok(
-        gpu_quiet(&dir)
+        quiet()
             .args(["compare", "--scene", "chessboard", "--width", "40"])
             .args(["--height", "30", "--techniques", "all,gpu:all", "--out"])
             .arg(&out),
@@ -201,7 +187,7 @@ fn bench_engines_on_the_gpu_times_every_gpu_technique() {
     }
     let json = dir.join("engines.json");
     let r = run_ok(
-        gpu_run(&dir)
+        shadowlab()
             .args(["bench", "engines", "--backend", "gpu", "--quick", "--json"])
             .arg(&json)
             .arg("--plots")
@@ -272,7 +258,7 @@ fn render_on_the_gpus_camera_pass_draws_what_the_cpu_pass_draws() {
     let image_of = |pass: &str, technique: &str| {
         let out = dir.join(format!("{technique}-{pass}.png").replace(':', "-"));
         run_ok(
-            gpu_quiet(&dir)
+            quiet()
                 .args(["render", "--scene", "chessboard", "--width", "160"])
                 .args(["--height", "120", "--technique", technique])
                 .args(["--camera-pass", pass, "--output"])
@@ -296,11 +282,11 @@ fn render_on_the_gpus_camera_pass_draws_what_the_cpu_pass_draws() {
             "{technique}: {apart} pixels differ between the camera passes"
         );
     }
-    let r = gpu_quiet(&dir)
+    let r = quiet()
         .args(["render", "--scene", "chessboard", "--camera-pass", "tpu"])
         .ran();
     refused(&r, &["tpu", "--camera-pass"]);
-    let r = gpu_quiet(&dir)
+    let r = quiet()
         .args(["--adapter", "no-such-adapter-anywhere", "render"])
         .args(["--scene", "chessboard", "--width", "16", "--height", "12"])
         .args(["--technique", "afsm", "--camera-pass", "gpu", "--output"])

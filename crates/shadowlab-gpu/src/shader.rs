@@ -28,6 +28,33 @@ pub const CAMERA_RAYS: Common = Common {
     name: "camera_rays.wgsl",
     source: include_str!("shaders/common/camera_rays.wgsl"),
 };
+/// `shaders/common/order_key.wgsl`: `order_key`, a float as an unsigned key of the same
+/// order, for reductions by integer atomics ([`order_key`] and [`float_of_key`] on the
+/// CPU).
+pub const ORDER_KEY: Common = Common {
+    name: "order_key.wgsl",
+    source: include_str!("shaders/common/order_key.wgsl"),
+};
+
+/// `order_key.wgsl`'s `order_key` on the CPU: keys compare as the floats do.
+pub fn order_key(f: f32) -> u32 {
+    let b = f.to_bits();
+    if b & 0x8000_0000 != 0 {
+        !b
+    } else {
+        b | 0x8000_0000
+    }
+}
+
+/// The float an [`order_key`] stands for.
+pub fn float_of_key(key: u32) -> f32 {
+    if key & 0x8000_0000 != 0 {
+        f32::from_bits(key & 0x7fff_ffff)
+    } else {
+        f32::from_bits(!key)
+    }
+}
+
 /// `shaders/common/light.wgsl`: the light, its shadow ray and `illuminates` (after
 /// [`RAY_OFFSET`]).
 pub const LIGHT: Common = Common {
@@ -177,5 +204,41 @@ impl PipelineKey {
                 .iter()
                 .zip(stage.common)
                 .all(|(a, b)| a.source == b.source)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_order_as_their_floats() {
+        let zs = [
+            f32::NEG_INFINITY,
+            -3.5,
+            -1e-30,
+            0.0,
+            1e-30,
+            0.25,
+            7.0,
+            f32::INFINITY,
+        ];
+        for w in zs.windows(2) {
+            assert!(order_key(w[0]) < order_key(w[1]), "{} {}", w[0], w[1]);
+        }
+        for z in zs {
+            assert_eq!(float_of_key(order_key(z)), z);
+        }
+    }
+
+    #[test]
+    fn keys_keep_the_floats_order_and_come_back() {
+        let xs = [-1e30f32, -2.5, -0.0, 0.0, 1e-30, 3.0, 1e30];
+        for w in xs.windows(2) {
+            assert!(order_key(w[0]) <= order_key(w[1]), "{w:?}");
+        }
+        for x in xs {
+            assert_eq!(float_of_key(order_key(x)).to_bits(), x.to_bits());
+        }
     }
 }

@@ -12,7 +12,7 @@
 // minimum, maximum and sum do not depend on the order
 // the pixels ran in, so the summary is the same bits every run. The G-buffer discarded
 // the fragments alpha masks cut out already. Composed after
-// shaders/common/{ray_offset, camera_rays}.wgsl.
+// shaders/common/{ray_offset, camera_rays, order_key}.wgsl.
 
 struct SamplesU {
     rays: RaysU,
@@ -44,12 +44,6 @@ fn corner(tri: u32, k: u32) -> vec3<f32> {
 // glam's `cross`, term for term.
 fn cross3(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-}
-
-// A float's bits mapped so that unsigned order is the floats' order.
-fn order_key(f: f32) -> u32 {
-    let b = bitcast<u32>(f);
-    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
 }
 
 fn write_uncovered(k: u32) {

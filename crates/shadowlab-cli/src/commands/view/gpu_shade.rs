@@ -55,6 +55,20 @@ pub struct OnDeviceFrame {
     pub visibility: wgpu::Buffer,
 }
 
+/// A frame's camera pass as the device path takes it.
+struct DevicePass {
+    /// The camera, its depth range fitted.
+    camera: Camera,
+    /// The library's samples; none per pixel when the pass is the GPU's own.
+    view: ViewSamples,
+    /// The samples on the device.
+    device: DeviceView,
+    /// The pass's wall times.
+    stages_ms: Vec<(String, f64)>,
+    /// The pass's GPU times (`gpu_STAGE_ms`).
+    counters: BTreeMap<String, f64>,
+}
+
 /// The shading and the error on the device, for one scene.
 pub struct GpuShading {
     gpu: Arc<Gpu>,
@@ -101,18 +115,17 @@ impl GpuShading {
         previous: (Option<Drawn>, Option<OnDeviceFrame>),
         target: &wgpu::Texture,
     ) -> Result<(Drawn, OnDeviceFrame)> {
-        let gpu = &self.gpu;
-        let (camera, view, device_view, mut stages_ms, mut counters) =
-            if technique.needs_cpu_samples() {
-                let (camera, view, _, mut stages_ms) =
-                    frame::camera_pass(scene, camera, false, previous.0)?;
-                let t0 = Instant::now();
-                let device_view = DeviceView::upload(gpu, &view)?;
-                stages_ms.push(("upload view".to_string(), frame::ms(t0)));
-                (camera, view, device_view, stages_ms, BTreeMap::new())
-            } else {
-                self.camera_pass(scene, camera, previous)?
-            };
+        let DevicePass {
+            camera,
+            view,
+            device: device_view,
+            mut stages_ms,
+            mut counters,
+        } = if technique.needs_cpu_samples() {
+            self.uploaded_pass(scene, camera, previous.0)?
+        } else {
+            self.camera_pass(scene, camera, previous)?
+        };
         let gpu_camera_pass = !device_view.uploaded;
         let f = Frame::new(scene, &camera, light, &view);
         let t1 = Instant::now();
@@ -160,43 +173,60 @@ impl GpuShading {
         Ok((drawn, on_device))
     }
 
+    /// The library's camera pass of `camera` (kept from `previous` as [`frame::camera_pass`]
+    /// keeps it), uploaded: for a technique that reads the samples on the CPU too.
+    fn uploaded_pass(
+        &self,
+        scene: &Scene,
+        camera: &Camera,
+        previous: Option<Drawn>,
+    ) -> Result<DevicePass> {
+        let (camera, view, _, mut stages_ms) = frame::camera_pass(scene, camera, false, previous)?;
+        let t0 = Instant::now();
+        let device = DeviceView::upload(&self.gpu, &view)?;
+        stages_ms.push(("upload view".to_string(), frame::ms(t0)));
+        Ok(DevicePass {
+            camera,
+            view,
+            device,
+            stages_ms,
+            counters: BTreeMap::new(),
+        })
+    }
+
     /// The GPU's camera pass of `camera`, its depth range fitted: kept from the previous
     /// frame when that frame's was the GPU's of the same camera, else drawn. The frame's
     /// `view` holds no per-pixel data (the samples stay on the device); the counters hold
     /// the pass's GPU times.
-    #[allow(clippy::type_complexity)]
     fn camera_pass(
         &self,
         scene: &Scene,
         camera: &Camera,
         (previous, previous_on): (Option<Drawn>, Option<OnDeviceFrame>),
-    ) -> Result<(
-        Camera,
-        ViewSamples,
-        DeviceView,
-        Vec<(String, f64)>,
-        BTreeMap<String, f64>,
-    )> {
+    ) -> Result<DevicePass> {
         let mut camera = *camera;
         camera.fit_depth_range(&scene.bounds);
         camera.validate()?;
         if let (Some(p), Some(on)) = (previous, previous_on) {
             if p.gpu_camera_pass && p.camera == camera {
-                let kept = vec![("camera pass (GPU, kept)".to_string(), 0.0)];
-                return Ok((camera, p.view, on.view, kept, BTreeMap::new()));
+                return Ok(DevicePass {
+                    camera,
+                    view: p.view,
+                    device: on.view,
+                    stages_ms: vec![("camera pass (GPU, kept)".to_string(), 0.0)],
+                    counters: BTreeMap::new(),
+                });
             }
         }
         let t0 = Instant::now();
-        let (device_view, times) =
-            camera_pass::on_device(&self.gpu, &self.scene, scene.len(), &camera)?;
-        let stages = vec![("camera pass (GPU)".to_string(), frame::ms(t0))];
-        Ok((
+        let (device, times) = camera_pass::on_device(&self.gpu, &self.scene, scene.len(), &camera)?;
+        Ok(DevicePass {
             camera,
-            ViewSamples::unsampled(&camera),
-            device_view,
-            stages,
-            times.into_iter().collect(),
-        ))
+            view: ViewSamples::unsampled(&camera),
+            device,
+            stages_ms: vec![("camera pass (GPU)".to_string(), frame::ms(t0))],
+            counters: times.into_iter().collect(),
+        })
     }
 
     /// Traces the reference with `spp` samples a pixel over the drawn frame `d`, compares

@@ -5,7 +5,7 @@
 // threads' depths in shared memory, then one thread per workgroup folds them into the two
 // global bounds. Depths are reduced as order-preserving integer keys with integer atomics
 // (min and max are exact and order-independent), so the result does not depend on the
-// order threads run. Composed after shaders/common/{ray_offset, light}.wgsl.
+// order threads run. Composed after shaders/common/{ray_offset, light, order_key}.wgsl.
 
 struct Params {
     light: LightU,
@@ -32,15 +32,6 @@ const KEY_NEG_INF: u32 = 0x007fffffu;
 var<workgroup> lo: atomic<u32>;
 var<workgroup> hi: atomic<u32>;
 
-// An order-preserving key of a float: keys compare as the floats do.
-fn key_of(z: f32) -> u32 {
-    let b = bitcast<u32>(z);
-    if (b & 0x80000000u) != 0u {
-        return ~b;
-    }
-    return b | 0x80000000u;
-}
-
 @compute @workgroup_size(64)
 fn main(
     @builtin(global_invocation_id) gid: vec3<u32>,
@@ -60,7 +51,7 @@ fn main(
             let n = vec3<f32>(view[b + 6u], view[b + 7u], view[b + 8u]);
             if illuminates(params.light, p, n) {
                 let z = dot3(p - params.eye.xyz, params.forward.xyz);
-                let key = key_of(z);
+                let key = order_key(z);
                 atomicMin(&lo, key);
                 atomicMax(&hi, key);
             }

@@ -5,7 +5,7 @@
 // nearer than the biased receiver on an 8 × 8 grid over it, and the penumbra's width by
 // similar triangles: the side of the pixel's filter footprint in map coordinates (−1 when
 // no blocker is found: the pixel is lit; 0 where the light does not reach). Composed after
-// shaders/common/{ray_offset, light}.wgsl and filtering/{views, pyramid}.wgsl.
+// shaders/common/{ray_offset, light, order_key}.wgsl and filtering/{views, pyramid}.wgsl.
 
 @group(0) @binding(0) var<uniform> fit: FitU;
 @group(0) @binding(1) var<storage, read> views: array<ViewU>;

@@ -7,7 +7,7 @@
 
 use super::Codec;
 use crate::device::Gpu;
-use crate::shader::{Common, Stage, LIGHT, RAY_OFFSET};
+use crate::shader::{order_key, Common, Stage, LIGHT, ORDER_KEY, RAY_OFFSET};
 use crate::transfer::{grid, output, read_back, storage, uniform, Timer};
 use crate::upload::LightU;
 use bytemuck::{Pod, Zeroable};
@@ -28,12 +28,12 @@ const PYRAMID: Common = Common {
 };
 const FIT: Stage = Stage {
     name: "filtering/fit.wgsl",
-    common: &[RAY_OFFSET, LIGHT, VIEWS, PYRAMID],
+    common: &[RAY_OFFSET, LIGHT, ORDER_KEY, VIEWS, PYRAMID],
     source: include_str!("fit.wgsl"),
 };
 const BLOCKER_SEARCH: Stage = Stage {
     name: "filtering/blocker_search.wgsl",
-    common: &[RAY_OFFSET, LIGHT, VIEWS, PYRAMID],
+    common: &[RAY_OFFSET, LIGHT, ORDER_KEY, VIEWS, PYRAMID],
     source: include_str!("blocker_search.wgsl"),
 };
 
@@ -96,16 +96,6 @@ pub(super) fn filter_code(f: Filter) -> u32 {
         Filter::Bilinear => 0,
         Filter::Trilinear => 1,
         Filter::Anisotropic => 2,
-    }
-}
-
-/// `fit.wgsl`'s `order_key`.
-fn order_key(f: f32) -> u32 {
-    let b = f.to_bits();
-    if b & 0x8000_0000 != 0 {
-        !b
-    } else {
-        b | 0x8000_0000
     }
 }
 

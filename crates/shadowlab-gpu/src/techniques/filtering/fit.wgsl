@@ -7,8 +7,8 @@
 // filter support with the pyramid and tests it against the receiver's own tangent plane;
 // `ranges` turns each view's sums into its range. Minima and maxima go through integer
 // atomics on order-keeping float bits and counts through integer sums, so the result does
-// not depend on the threads' order. Composed after shaders/common/{ray_offset,
-// light}.wgsl and filtering/{views, pyramid}.wgsl.
+// not depend on the threads' order. Composed after shaders/common/{ray_offset, light,
+// order_key}.wgsl and filtering/{views, pyramid}.wgsl.
 
 @group(0) @binding(0) var<uniform> fit: FitU;
 @group(0) @binding(1) var<storage, read> views: array<ViewU>;

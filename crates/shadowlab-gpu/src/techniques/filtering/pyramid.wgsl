@@ -35,15 +35,6 @@ struct FitU {
     slope_bias: f32,
 }
 
-// A float's bits in an order that unsigned comparison keeps (for atomic min and max).
-fn order_key(f: f32) -> u32 {
-    let b = bitcast<u32>(f);
-    if (b & 0x80000000u) != 0u {
-        return ~b;
-    }
-    return b | 0x80000000u;
-}
-
 fn from_key(k: u32) -> f32 {
     if (k & 0x80000000u) != 0u {
         return bitcast<f32>(k & 0x7fffffffu);
