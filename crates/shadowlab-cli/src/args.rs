@@ -272,6 +272,11 @@ pub struct ViewArgs {
     /// Render this many frames, each from scratch, print the time per stage and quit.
     #[arg(long = "benchmark-frames", value_name = "N")]
     pub benchmark_frames: Option<usize>,
+    /// With --benchmark-frames: draw each frame into a texture of the window's size and wait
+    /// for it, instead of presenting it (chosen by itself when the adapter cannot present to
+    /// the display).
+    #[arg(long)]
+    pub offscreen: bool,
     /// Start with the error overlay on (the error against the reference, measured on the
     /// GPU for techniques that stay on the device; benchmarks then time it too).
     #[arg(long = "error-overlay")]

@@ -288,6 +288,13 @@ fn without_an_adapter_view_says_so() {
 }
 
 #[test]
+fn offscreen_is_for_benchmarks_only() {
+    let d = tmp("offscreen");
+    let r = view(&d, Some(":4095"), &["--scene", "bunny", "--offscreen"]);
+    refused(&r, &["--offscreen", "--benchmark-frames"]);
+}
+
+#[test]
 fn a_bad_script_is_refused_before_any_window() {
     let d = tmp("badscript");
     std::fs::write(d.join("s.txt"), "key tab\nkey f13\n").unwrap();
@@ -755,32 +762,36 @@ fn benchmark_frames_time_every_stage_with_the_gpus_own() {
         return;
     }
     let d = tmp("benchmark");
-    let bench = |technique: &str| {
-        let r = view(
-            &d,
-            Some(&x.display),
-            &[
-                "--scene",
-                "chessboard",
-                "--width",
-                "160",
-                "--height",
-                "120",
-                "--technique",
-                technique,
-                "--error-overlay",
-                "--benchmark-frames",
-                "3",
-            ],
-        );
+    let bench_with = |technique: &str, extra: &[&str]| {
+        let mut args = vec![
+            "--scene",
+            "chessboard",
+            "--width",
+            "160",
+            "--height",
+            "120",
+            "--technique",
+            technique,
+            "--error-overlay",
+            "--benchmark-frames",
+            "3",
+        ];
+        args.extend(extra);
+        let r = view(&d, Some(&x.display), &args);
         support::ok(&r);
         r.stdout
     };
+    let bench = |technique: &str| bench_with(technique, &[]);
     // A gpu: technique on the device: the GPU's camera pass, each frame drawn anew (the
     // camera turns), its two stages timed by timestamp queries, the error traced there.
     let out = bench("gpu:sm");
     let first = out.lines().next().unwrap_or_default();
-    assert!(first.starts_with("gpu:sm: 3 frames, "), "{out}");
+    assert!(
+        first.starts_with("gpu:sm: 3 frames after a warm-up frame, "),
+        "{out}"
+    );
+    // lavapipe presents to Xvfb: into the window.
+    assert!(!out.contains("drawn offscreen"), "{out}");
     let fps: f64 = first
         .split(", ")
         .find_map(|p| p.strip_suffix(" frames per second"))
@@ -801,9 +812,19 @@ fn benchmark_frames_time_every_stage_with_the_gpus_own() {
             assert!(out.contains(stage), "no {stage:?} in {out}");
         }
     }
+    // Offscreen (as on a GPU that cannot present to Xvfb): the same stages, and the report
+    // says where the frames went.
+    let out = bench_with("gpu:sm", &["--offscreen"]);
+    assert!(
+        out.contains("drawn offscreen") && out.contains("error vs gpu:raytrace"),
+        "{out}"
+    );
     // A CPU technique: the library's camera pass and the image uploaded.
     let out = bench("sm");
-    assert!(out.starts_with("sm: 3 frames, "), "{out}");
+    assert!(
+        out.starts_with("sm: 3 frames after a warm-up frame, "),
+        "{out}"
+    );
     assert!(
         out.contains("camera pass ") && !out.contains("camera pass (GPU)"),
         "{out}"

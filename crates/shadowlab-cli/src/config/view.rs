@@ -29,6 +29,8 @@ pub struct ViewConfig {
     pub script: Option<PathBuf>,
     /// Frames to time, then quit.
     pub benchmark_frames: Option<usize>,
+    /// Draw the benchmark's frames into a texture instead of the window.
+    pub offscreen: bool,
     /// Start with the error overlay on.
     pub error_overlay: bool,
     /// Where the screenshot key writes.
@@ -53,6 +55,11 @@ impl ViewConfig {
                 )));
             }
         }
+        if a.offscreen && a.benchmark_frames.is_none() {
+            return Err(bad_input(
+                "--offscreen is for --benchmark-frames, whose frames nobody watches",
+            ));
+        }
         if !a.screenshot_dir.is_dir() {
             return Err(bad_input(format!(
                 "--screenshot-dir {} is not a folder",
@@ -73,6 +80,7 @@ impl ViewConfig {
             scene_args,
             script: a.script.clone(),
             benchmark_frames: a.benchmark_frames,
+            offscreen: a.offscreen,
             error_overlay: a.error_overlay,
             screenshot_dir: a.screenshot_dir.clone(),
             force: a.force,

@@ -11,7 +11,7 @@ use super::reference::{self, Background, Traced};
 use super::screenshot::{self, ErrorFigures};
 use super::session::{Session, Technique};
 use super::ui::{self, Action, Fields, Widgets};
-use super::window::Screen;
+use super::window::{Drawing, Screen};
 use super::{panel, Steps};
 use anyhow::Result;
 use shadowlab::compare::{compare, Metrics};
@@ -48,10 +48,15 @@ pub enum Driver {
     Script(Steps),
     /// A benchmark: frames left to draw, and each drawn frame's stages.
     Benchmark {
-        /// Frames left.
+        /// Frames left, the warm-up frame's included.
         left: usize,
+        /// Whether the next drawn frame is the warm-up (its pipelines made, its buffers
+        /// allocated, the reference's scene uploaded), which is drawn but not counted.
+        warm_up: bool,
         /// Each frame's stages in milliseconds.
         frames: Vec<Vec<(String, f64)>>,
+        /// Drawn offscreen even where the adapter can present (`--offscreen`).
+        offscreen: bool,
     },
 }
 
@@ -139,6 +144,9 @@ impl<'a> App<'a> {
         }
         if let Driver::Benchmark { frames, .. } = &self.driver {
             println!("{}", super::benchmark::summary(&self.session.name, frames));
+            if self.window.as_ref().is_some_and(|w| w.offscreen()) {
+                println!("{}", super::benchmark::OFFSCREEN);
+            }
             println!("adapter: {}", self.gpu.adapter.label());
         }
         Ok(())
@@ -259,8 +267,14 @@ impl<'a> App<'a> {
         while self.history.len() > ui::HISTORY {
             self.history.pop_front();
         }
-        if let Driver::Benchmark { frames, .. } = &mut self.driver {
-            frames.push(stages.into_iter().chain(gpu).collect());
+        if let Driver::Benchmark {
+            frames, warm_up, ..
+        } = &mut self.driver
+        {
+            match warm_up {
+                true => *warm_up = false,
+                false => frames.push(stages.into_iter().chain(gpu).collect()),
+            }
         }
     }
 
@@ -398,7 +412,14 @@ impl ApplicationHandler<ReferenceReady> for App<'_> {
             let s = &self.session;
             let title = format!("shadowlab view — {}", s.scene.name);
             let (w, h) = (s.camera.width, s.camera.height);
-            match Screen::open(event_loop, self.gpu.clone(), &title, w, h) {
+            let drawing = match self.driver {
+                Driver::Benchmark {
+                    offscreen: true, ..
+                } => Drawing::Offscreen,
+                Driver::Benchmark { .. } => Drawing::Benchmark,
+                _ => Drawing::Window,
+            };
+            match Screen::open(event_loop, self.gpu.clone(), &title, (w, h), drawing) {
                 Ok(w) => self.window = Some(w),
                 Err(e) => self.fail(event_loop, e),
             }

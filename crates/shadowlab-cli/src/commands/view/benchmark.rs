@@ -1,7 +1,11 @@
 //! `--benchmark-frames`: the time of each stage of the viewer's frames, each drawn from
-//! scratch (camera pass, technique, shading, upload, panel and presentation), averaged;
+//! scratch (camera pass, technique, shading, upload, panel and presentation), averaged
+//! over the frames after a warm-up frame (which makes the pipelines and first buffers);
 //! and apart from them, the GPU's own stage times (timestamp queries), which run inside
 //! the technique's stages and so are not added to the frame.
+
+/// The report's line when the frames were drawn into a texture, not the window.
+pub const OFFSCREEN: &str = "drawn offscreen: each frame into a texture of the window's size, waited for, not presented (--offscreen, or an adapter that cannot present to this display)";
 
 /// The name prefix of a GPU stage time.
 pub const GPU_PREFIX: &str = "gpu ";
@@ -24,7 +28,7 @@ pub fn summary(technique: &str, frames: &[Vec<(String, f64)>]) -> String {
         .partition(|(s, _)| s.starts_with(GPU_PREFIX));
     let total: f64 = wall.iter().map(|(_, t)| t).sum::<f64>() / n;
     let mut out = format!(
-        "{technique}: {} frames, {total:.1} ms a frame, {:.1} frames per second",
+        "{technique}: {} frames after a warm-up frame, {total:.1} ms a frame, {:.1} frames per second",
         frames.len(),
         1e3 / total.max(1e-9)
     );
@@ -51,7 +55,10 @@ mod tests {
             vec![("a".to_string(), 4.0), ("gpu x".to_string(), 3.0)],
         ];
         let s = summary("t", &frames);
-        assert!(s.starts_with("t: 2 frames, 3.0 ms a frame"), "{s}");
+        assert!(
+            s.starts_with("t: 2 frames after a warm-up frame, 3.0 ms a frame"),
+            "{s}"
+        );
         assert!(s.contains("gpu x") && s.contains("2.00 ms"), "{s}");
     }
 }

@@ -51,15 +51,22 @@ pub fn run(cfg: ViewConfig) -> Result<()> {
         }
         (Some(p), None) => Driver::Script(script::load(p, cfg.force)?),
         (None, Some(n)) => Driver::Benchmark {
-            left: n,
+            left: n + 1,
+            warm_up: true,
             frames: Vec::new(),
+            offscreen: cfg.offscreen,
         },
         (None, None) => Driver::Person,
     };
     keep_freed_memory();
+    // Offscreen, the GPU is opened before the display and without it (`gpu_without_display`).
+    let early = cfg.offscreen.then(gpu_without_display).transpose()?;
     let event_loop = open_display()?;
     event_loop.set_control_flow(ControlFlow::Wait);
-    let gpu = open_gpu()?;
+    let gpu = match early {
+        Some(gpu) => gpu,
+        None => open_gpu()?,
+    };
     let proxy = event_loop.create_proxy();
     let mut session = Session::new(
         &cfg.setup.scene,
@@ -116,6 +123,22 @@ fn open_gpu() -> Result<std::sync::Arc<shadowlab_gpu::device::Gpu>> {
         shadowlab::error::Error::Internal(m) => anyhow::anyhow!("view cannot draw: {m}"),
         e => bad_input(format!("view draws with the GPU and {e}")),
     })
+}
+
+/// [`open_gpu`] with `DISPLAY` hidden from the GPU's driver, for `--offscreen`, which
+/// draws nothing into the window. NVIDIA's Vulkan driver asks the X server that `DISPLAY`
+/// names for GLX; under a bare Xvfb (no GLX) on an H200 the viewer then ended in a
+/// segmentation fault, and without a display the driver opens its device headless.
+fn gpu_without_display() -> Result<std::sync::Arc<shadowlab_gpu::device::Gpu>> {
+    let display = std::env::var_os("DISPLAY");
+    // Nothing else reads the environment meanwhile: the reference's worker starts after
+    // the window opens, and no other thread of this process touches it.
+    std::env::remove_var("DISPLAY");
+    let gpu = open_gpu();
+    if let Some(d) = display {
+        std::env::set_var("DISPLAY", d);
+    }
+    gpu
 }
 
 /// Frames allocate and free the same large buffers again and again (the camera pass, a

@@ -3,6 +3,10 @@
 //! laid over it) and the panel drawn by egui on top. The window is the view's size plus
 //! the panel's column on the right (not resizable, so a pixel of the view is a pixel of
 //! `render`'s image); a screenshot draws the same frame into a texture and reads it back.
+//!
+//! A benchmark drawn offscreen (`--offscreen`, or an adapter that cannot present to the
+//! window) draws each frame into a texture of the window's size instead and waits for it:
+//! the same work but the swap, and the report says so.
 
 use crate::failure::bad_input;
 use anyhow::{anyhow, Result};
@@ -39,14 +43,36 @@ pub struct ViewTextures {
     pub error: wgpu::Texture,
 }
 
+/// How frames reach the screen.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Drawing {
+    /// Into the window, at the display's refresh.
+    Window,
+    /// A benchmark: into the window as fast as it goes, or offscreen when the adapter
+    /// cannot present to it.
+    Benchmark,
+    /// A benchmark drawn offscreen (`--offscreen`).
+    Offscreen,
+}
+
+/// What a frame is drawn into: the window's surface, or (a benchmark on an adapter that
+/// cannot present to this display) a texture of its size.
+enum Target {
+    Surface {
+        surface: wgpu::Surface<'static>,
+        config: wgpu::SurfaceConfiguration,
+    },
+    Offscreen(wgpu::Texture),
+}
+
 /// An open window with its surface, egui and the view pass.
 pub struct Screen {
     /// The window.
     pub window: Arc<Window>,
     /// The shared device.
     pub gpu: Arc<Gpu>,
-    surface: wgpu::Surface<'static>,
-    config: wgpu::SurfaceConfiguration,
+    target: Target,
+    size: (u32, u32),
     target_format: wgpu::TextureFormat,
     /// egui's context.
     pub egui: egui::Context,
@@ -90,13 +116,14 @@ fn rgba_texture(gpu: &Gpu, label: &str, (w, h): (u32, u32)) -> wgpu::Texture {
 }
 
 impl Screen {
-    /// Opens a window for a view of `width` × `height` pixels titled `title`, on `gpu`.
+    /// Opens a window for a view of `width` × `height` pixels titled `title`, on `gpu`,
+    /// drawn as `drawing` says.
     pub fn open(
         event_loop: &ActiveEventLoop,
         gpu: Arc<Gpu>,
         title: &str,
-        width: u32,
-        height: u32,
+        (width, height): (u32, u32),
+        drawing: Drawing,
     ) -> Result<Self> {
         let size = PhysicalSize::new(width + PANEL_WIDTH, height.max(MIN_HEIGHT));
         let attrs = Window::default_attributes()
@@ -108,40 +135,44 @@ impl Screen {
                 .create_window(attrs)
                 .map_err(|e| bad_input(format!("view cannot open a window: {e}")))?,
         );
-        let surface = gpu
-            .instance
-            .create_surface(window.clone())
-            .map_err(|e| anyhow!("cannot draw into the window with the GPU: {e}"))?;
-        let caps = surface.get_capabilities(&gpu.handle);
-        let Some(&format) = caps
-            .formats
-            .iter()
-            .find(|f| !f.is_srgb())
-            .or(caps.formats.first())
-        else {
-            return Err(bad_input(format!(
-                "the GPU adapter {} cannot draw into this window",
-                gpu.adapter.name
-            )));
-        };
-        // The view's bytes go to the window unchanged: through a non-sRGB view.
-        let target_format = format.remove_srgb_suffix();
-        let config = wgpu::SurfaceConfiguration {
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            format,
-            width: size.width,
-            height: size.height,
-            present_mode: wgpu::PresentMode::AutoVsync,
-            desired_maximum_frame_latency: 2,
-            alpha_mode: caps.alpha_modes[0],
-            color_space: wgpu::SurfaceColorSpace::Auto,
-            view_formats: if target_format == format {
-                vec![]
-            } else {
-                vec![target_format]
+        // Offscreen, no surface is made: the adapter may have been opened without the display.
+        let surface = match drawing {
+            Drawing::Offscreen => None,
+            _ => match gpu.instance.create_surface(window.clone()) {
+                Ok(s) => Some(s),
+                Err(_) if drawing == Drawing::Benchmark => None,
+                Err(e) => return Err(anyhow!("cannot draw into the window with the GPU: {e}")),
             },
         };
-        surface.configure(&gpu.device, &config);
+        let on_surface =
+            surface.and_then(|s| surface_target(&gpu, s, size, drawing == Drawing::Window));
+        let (target, target_format) = match on_surface {
+            Some(t) => t,
+            None if drawing != Drawing::Window => {
+                let format = wgpu::TextureFormat::Rgba8Unorm;
+                let t = gpu.device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("the offscreen window"),
+                    size: wgpu::Extent3d {
+                        width: size.width,
+                        height: size.height,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                    view_formats: &[],
+                });
+                (Target::Offscreen(t), format)
+            }
+            None => {
+                return Err(bad_input(format!(
+                    "the GPU adapter {} cannot draw into this window",
+                    gpu.adapter.name
+                )))
+            }
+        };
         let egui = egui::Context::default();
         let state = egui_winit::State::new(
             egui.clone(),
@@ -165,8 +196,8 @@ impl Screen {
         Ok(Screen {
             window,
             gpu,
-            surface,
-            config,
+            target,
+            size: (size.width, size.height),
             target_format,
             egui,
             state,
@@ -175,6 +206,11 @@ impl Screen {
             textures,
             view_size: (width, height),
         })
+    }
+
+    /// Whether frames go to a texture instead of the window (see the module's note).
+    pub fn offscreen(&self) -> bool {
+        matches!(self.target, Target::Offscreen(_))
     }
 
     /// Asks for a frame.
@@ -227,7 +263,7 @@ impl Screen {
             }
         }
         let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [self.config.width, self.config.height],
+            size_in_pixels: [self.size.0, self.size.1],
             pixels_per_point: painted.ppp,
         };
         let gpu = self.gpu.clone();
@@ -266,19 +302,27 @@ impl Screen {
                 },
             ],
         });
-        let frame = match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(f)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
-                return Ok(None)
-            }
-            _ => {
-                // Outdated or lost: configured again, drawn on the next frame.
-                self.surface.configure(&gpu.device, &self.config);
-                return Ok(None);
-            }
+        let frame = match &self.target {
+            Target::Surface { surface, config } => match surface.get_current_texture() {
+                wgpu::CurrentSurfaceTexture::Success(f)
+                | wgpu::CurrentSurfaceTexture::Suboptimal(f) => Some(f),
+                wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                    return Ok(None)
+                }
+                _ => {
+                    // Outdated or lost: configured again, drawn on the next frame.
+                    surface.configure(&gpu.device, config);
+                    return Ok(None);
+                }
+            },
+            Target::Offscreen(_) => None,
         };
-        let target = frame.texture.create_view(&wgpu::TextureViewDescriptor {
+        let texture = match (&frame, &self.target) {
+            (Some(f), _) => &f.texture,
+            (None, Target::Offscreen(t)) => t,
+            (None, Target::Surface { .. }) => unreachable!("a surface frame was taken above"),
+        };
+        let target = texture.create_view(&wgpu::TextureViewDescriptor {
             format: Some(self.target_format),
             ..Default::default()
         });
@@ -286,7 +330,7 @@ impl Screen {
         let captured = if capture {
             let t = gpu.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("screenshot"),
-                size: frame.texture.size(),
+                size: texture.size(),
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
@@ -302,7 +346,15 @@ impl Screen {
         };
         gpu.queue
             .submit(extra.into_iter().chain([encoder.finish()]));
-        gpu.queue.present(frame);
+        match frame {
+            Some(f) => gpu.queue.present(f),
+            // Offscreen, the frame counts until the GPU has drawn it.
+            None => gpu
+                .device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map(|_| ())
+                .map_err(|e| anyhow!("waiting for the GPU to draw the frame failed: {e}"))?,
+        }
         for id in &painted.textures.free {
             self.renderer.free_texture(id);
         }
@@ -342,6 +394,46 @@ impl Screen {
         pass.draw(0..3, 0..1);
         self.renderer.render(&mut pass, jobs, screen);
     }
+}
+
+/// The window's surface configured for drawing, and the format frames are drawn in; `None`
+/// when the adapter cannot present to it.
+fn surface_target(
+    gpu: &Gpu,
+    surface: wgpu::Surface<'static>,
+    size: PhysicalSize<u32>,
+    vsync: bool,
+) -> Option<(Target, wgpu::TextureFormat)> {
+    let caps = surface.get_capabilities(&gpu.handle);
+    let &format = caps
+        .formats
+        .iter()
+        .find(|f| !f.is_srgb())
+        .or(caps.formats.first())?;
+    // The view's bytes go to the window unchanged: through a non-sRGB view.
+    let target_format = format.remove_srgb_suffix();
+    let config = wgpu::SurfaceConfiguration {
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        format,
+        width: size.width,
+        height: size.height,
+        // A benchmark times the frames, not the display's refresh.
+        present_mode: if vsync {
+            wgpu::PresentMode::AutoVsync
+        } else {
+            wgpu::PresentMode::AutoNoVsync
+        },
+        desired_maximum_frame_latency: 2,
+        alpha_mode: caps.alpha_modes[0],
+        color_space: wgpu::SurfaceColorSpace::Auto,
+        view_formats: if target_format == format {
+            vec![]
+        } else {
+            vec![target_format]
+        },
+    };
+    surface.configure(&gpu.device, &config);
+    Some((Target::Surface { surface, config }, target_format))
 }
 
 fn blit_pipeline(device: &wgpu::Device, format: wgpu::TextureFormat) -> wgpu::RenderPipeline {
