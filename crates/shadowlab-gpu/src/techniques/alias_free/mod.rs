@@ -90,7 +90,7 @@ use crate::resident::{DeviceShadows, DeviceView, OnDevice};
 use crate::shader::{Common, Stage, ALPHA_MASK, LIGHT, RAY_OFFSET, TRIANGLES, WATERTIGHT};
 use crate::transfer::storage;
 use crate::upload::{view_buffer, SceneBuffers, SceneKey};
-use buffers::COUNTERS;
+use buffers::{Bufs, COUNTERS};
 use kit::Kit;
 use run::{run, Input, Kits, Setting};
 use shadowlab::error::{Error, Result};
@@ -176,6 +176,8 @@ struct Resident {
     scene: SceneBuffers,
     mat_q: wgpu::Buffer,
     kits: Arc<Kits>,
+    /// The last frame's buffers, for the next frame to reuse.
+    spare: Mutex<Option<Bufs>>,
 }
 
 /// The kits, made once per process (the one shared device): lavapipe's LLVM takes
@@ -260,6 +262,7 @@ impl GpuAliasFree {
                 scene,
                 mat_q,
                 kits,
+                spare: Mutex::new(None),
             });
         }
         self.resident

@@ -2,7 +2,9 @@
 //! and timed in the paper's order (transform, bin, raster and test per batch of
 //! triangles, resolve).
 
-use super::buffers::{plane_init, Bufs, Caps, CHUNK_WORDS, COUNTERS, PLANE_WORDS, RECORD_WORDS};
+use super::buffers::{
+    capacity, plane_init, Bufs, Caps, Sizes, CHUNK_WORDS, COUNTERS, PLANE_WORDS, RECORD_WORDS,
+};
 use super::kit::{dispatch, Kit, Scan};
 use super::planes::Planes;
 use super::{Resident, NAME};
@@ -343,17 +345,24 @@ fn run_once(
     let cell_target = (leaf / 2).max(1);
     let cells = n / u64::from(cell_target) + 8;
     let chunk_cap = n.div_ceil(u64::from(leaf)) + cells;
-    let caps = Caps {
-        cells,
-        chunks: chunk_cap,
-        sat: 2 * cells + 16,
-        records: u64::from(tri_batch) * u64::from(n_planes),
+    // The buffers hold `capacity(n)` samples (and the grid for as many), so that the next
+    // frame can reuse them; the passes are given the frame's own counts.
+    let (n_cap, records) = (capacity(n), u64::from(tri_batch) * u64::from(n_planes));
+    let cells_cap = n_cap / u64::from(cell_target) + 8;
+    let sizes = Sizes {
+        n: n_cap,
+        pixels: u64::from(input.n_pixels),
+        caps: Caps {
+            cells: cells_cap,
+            chunks: n_cap.div_ceil(u64::from(leaf)) + cells_cap,
+            sat: 2 * cells_cap + 16,
+            records,
+        },
+        transparency: res.scene.transparency,
     };
     let pixels = u64::from(input.n_pixels);
-    let transparency = res.scene.transparency;
-    let b = stats.stage("buffers", || {
-        Bufs::new(gpu, n, pixels, caps, set.planes, transparency)
-    })?;
+    let spare = res.spare.lock().unwrap_or_else(|e| e.into_inner()).take();
+    let b = stats.stage("buffers", || Bufs::for_frame(gpu, spare, sizes, set.planes))?;
     let base = ParamsU {
         light: LightU::of(set.light),
         n_samples: input.n_samples,
@@ -430,6 +439,7 @@ fn run_once(
         tri_batches: batches,
         grid,
     };
+    *res.spare.lock().unwrap_or_else(|e| e.into_inner()) = Some(cx.b);
     Ok((o, overflowed))
 }
 
