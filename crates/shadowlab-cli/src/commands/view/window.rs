@@ -302,10 +302,13 @@ impl Screen {
                 },
             ],
         });
-        let frame = match &self.target {
+        let (frame, texture) = match &self.target {
             Target::Surface { surface, config } => match surface.get_current_texture() {
                 wgpu::CurrentSurfaceTexture::Success(f)
-                | wgpu::CurrentSurfaceTexture::Suboptimal(f) => Some(f),
+                | wgpu::CurrentSurfaceTexture::Suboptimal(f) => {
+                    let t = f.texture.clone();
+                    (Some(f), t)
+                }
                 wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
                     return Ok(None)
                 }
@@ -315,12 +318,7 @@ impl Screen {
                     return Ok(None);
                 }
             },
-            Target::Offscreen(_) => None,
-        };
-        let texture = match (&frame, &self.target) {
-            (Some(f), _) => &f.texture,
-            (None, Target::Offscreen(t)) => t,
-            (None, Target::Surface { .. }) => unreachable!("a surface frame was taken above"),
+            Target::Offscreen(t) => (None, t.clone()),
         };
         let target = texture.create_view(&wgpu::TextureViewDescriptor {
             format: Some(self.target_format),
