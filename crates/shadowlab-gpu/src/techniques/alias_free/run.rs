@@ -349,9 +349,10 @@ fn run_once(
     // frame can reuse them; the passes are given the frame's own counts.
     let (n_cap, records) = (capacity(n), u64::from(tri_batch) * u64::from(n_planes));
     let cells_cap = n_cap / u64::from(cell_target) + 8;
+    let pixels = u64::from(input.n_pixels);
     let sizes = Sizes {
         n: n_cap,
-        pixels: u64::from(input.n_pixels),
+        pixels,
         caps: Caps {
             cells: cells_cap,
             chunks: n_cap.div_ceil(u64::from(leaf)) + cells_cap,
@@ -360,7 +361,6 @@ fn run_once(
         },
         transparency: res.scene.transparency,
     };
-    let pixels = u64::from(input.n_pixels);
     let spare = res.spare.lock().unwrap_or_else(|e| e.into_inner()).take();
     let b = stats.stage("buffers", || Bufs::for_frame(gpu, spare, sizes, set.planes))?;
     let base = ParamsU {
